@@ -1,0 +1,72 @@
+"""Sparse solves that use LAPACK's banded routines when the matrix is narrow.
+
+A bar is a chain, so K is tridiagonal, and the saddle-point matrix [[K, Cᵀ], [C, 0]] becomes
+banded too once each multiplier is ordered next to the node it acts on. LAPACK solves a banded
+system in O(n) (``pbsv``, Cholesky, for SPD matrices; ``gbsv``, LU with partial pivoting, for
+indefinite ones). Anything wider goes to SuperLU.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from contactqp.errors import SolverError
+
+MAX_BANDWIDTH = 8  # beyond this, SuperLU with a fill-reducing ordering is the better tool
+
+
+def _bandwidths(matrix: sp.coo_array) -> tuple[int, int]:
+    """(lower, upper) bandwidth of a sparse matrix."""
+    if matrix.nnz == 0:
+        return 0, 0
+    offsets = matrix.row - matrix.col
+    return max(int(offsets.max()), 0), max(int(-offsets.min()), 0)
+
+
+def _band_storage(matrix: sp.coo_array, lower: int, upper: int) -> np.ndarray:
+    """LAPACK band storage: ab[upper + i - j, j] = a[i, j]; with upper = 0 this is also the
+    symmetric lower storage that ``solveh_banded`` reads."""
+    ab = np.zeros((lower + upper + 1, matrix.shape[1]))
+    ab[upper + matrix.row - matrix.col, matrix.col] = matrix.data  # entries are unique (summed)
+    return ab
+
+
+def solve(matrix: sp.sparray, rhs: np.ndarray, *, spd: bool = False,
+          order: np.ndarray | None = None) -> np.ndarray:
+    """Solve ``matrix @ x = rhs`` (rhs may have several columns).
+
+    ``spd``: the matrix is symmetric positive definite (banded Cholesky is used when narrow).
+    ``order``: a permutation of the unknowns that makes the matrix narrow, if one is known.
+    Raises SolverError when the matrix is singular (or, with ``spd``, not positive definite).
+    """
+    coo = sp.coo_array(matrix)
+    rhs = np.asarray(rhs, dtype=float)
+    if order is not None:
+        position = np.empty_like(order)
+        position[order] = np.arange(order.size)
+        coo = sp.coo_array((coo.data, (position[coo.row], position[coo.col])), shape=coo.shape)
+        rhs = rhs[order]
+    coo.sum_duplicates()
+    lower, upper = _bandwidths(coo)
+    try:
+        if max(lower, upper) <= MAX_BANDWIDTH and spd:
+            x = sla.solveh_banded(_band_storage(sp.coo_array(sp.tril(coo)), lower, 0), rhs, lower=True,
+                                  check_finite=False)
+        elif max(lower, upper) <= MAX_BANDWIDTH:
+            x = sla.solve_banded((lower, upper), _band_storage(coo, lower, upper), rhs,
+                                 check_finite=False)
+        else:
+            x = spla.splu(sp.csc_array(coo)).solve(rhs)
+    except (np.linalg.LinAlgError, RuntimeError) as error:
+        kind = "not positive definite" if spd else "singular"
+        raise SolverError(f"the linear system is {kind} ({error})") from None
+    if not np.all(np.isfinite(x)):
+        raise SolverError("the linear system is singular to working precision (non-finite solution)")
+    if order is not None:
+        unordered = np.empty_like(x)
+        unordered[order] = x
+        x = unordered
+    return x

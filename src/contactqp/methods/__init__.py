@@ -1,0 +1,80 @@
+"""Every way of solving a scene, behind one function: ``solve(scene, method, contact, **options)``.
+
+Each method is a function ``(model, contact, **options) -> Solution``; :func:`solve` builds the
+model, times the method, and turns its Solution into a checked Result.
+"""
+
+from __future__ import annotations
+
+import inspect
+import time
+from collections.abc import Callable
+from typing import Any
+
+from contactqp.errors import OptionError
+from contactqp.model import build_model
+from contactqp.result import Result, Solution, make_result
+from contactqp.scene import Scene, seed_scene
+from contactqp.methods.lagrange import solve_lagrange
+from contactqp.methods.penalty import solve_penalty
+
+CONTACT_KINDS = ("inequality", "equality")
+
+METHODS: dict[str, Callable[..., Solution]] = {
+    "lagrange": solve_lagrange,
+    "penalty": solve_penalty,
+}
+
+
+def method_options(method: str) -> tuple[str, ...]:
+    """The keyword options a method takes."""
+    parameters = inspect.signature(METHODS[method]).parameters.values()
+    return tuple(p.name for p in parameters if p.kind is inspect.Parameter.KEYWORD_ONLY)
+
+
+def _validate(method: str, contact: str, options: dict[str, Any]) -> Callable[..., Solution]:
+    if method not in METHODS:
+        raise OptionError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
+    if contact not in CONTACT_KINDS:
+        raise OptionError(f"contact must be one of {', '.join(CONTACT_KINDS)}; got {contact!r}")
+    allowed = method_options(method)
+    for name in options:
+        if name not in allowed:
+            raise OptionError(
+                f"method {method!r} has no option {name!r} (its options: {', '.join(allowed)})"
+            )
+    return METHODS[method]
+
+
+def check_equality_is_possible(scene: Scene) -> None:
+    """Equality contact ties a node to every wall it has: walls on both sides of one node
+    would hold it at +gap and -gap at once."""
+    sides: dict[int, int] = {}
+    for i, wall in enumerate(scene.walls):
+        if wall.node in sides:
+            raise OptionError(
+                f"contact='equality' cannot hold node {wall.node} at wall[{sides[wall.node]}] and "
+                f"wall[{i}] at once; use contact='inequality'"
+            )
+        sides[wall.node] = i
+
+
+def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "inequality",
+          **options: Any) -> Result:
+    """Solve a scene (the default scene when None) by ``method`` with ``contact``
+    "inequality" (unilateral, the default) or "equality" (the textbook form).
+
+    Methods and their options: "lagrange" (max_iterations), "penalty" (penalty ε in N/m,
+    default 1e14; max_iterations). Returns a checked :class:`Result`.
+    """
+    scene = seed_scene() if scene is None else scene
+    function = _validate(method, contact, options)
+    if contact == "equality":
+        check_equality_is_possible(scene)
+    start = time.perf_counter()
+    model = build_model(scene)
+    built = time.perf_counter()
+    solution = function(model, contact, **options)
+    solved = time.perf_counter()
+    return make_result(model, solution, method=method, contact=contact, options=options,
+                       timings={"build": built - start, "solve": solved - built})

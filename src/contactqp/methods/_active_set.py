@@ -1,0 +1,42 @@
+"""One active-set loop for every method that enforces unilateral contact by equalities."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from contactqp.errors import SolverError
+
+Step = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+Update = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+
+def default_max_iterations(n_walls: int) -> int:
+    return 50 + 2 * n_walls
+
+
+def active_set_loop(n_walls: int, step: Step, update: Update, *, method: str,
+                    max_iterations: int | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+    """Iterate ``active -> step(active) = (u, λ) -> update(active, u, λ)`` to a fixed point.
+
+    Starts with every wall open. Returns (u, λ, iterations). It terminates: a set that comes
+    back (a cycle) or more than ``max_iterations`` steps is a SolverError that says so.
+    """
+    limit = default_max_iterations(n_walls) if max_iterations is None else int(max_iterations)
+    active = np.zeros(n_walls, dtype=bool)
+    seen = {active.tobytes()}
+    for iteration in range(1, limit + 1):
+        u, lam = step(active)
+        following = update(active, u, lam)
+        if np.array_equal(following, active):
+            return u, lam, iteration
+        key = following.tobytes()
+        if key in seen:
+            raise SolverError(
+                f"{method}: the active-set loop cycles (walls in contact "
+                f"{np.flatnonzero(following).tolist()} came back after {iteration} steps)"
+            )
+        seen.add(key)
+        active = following
+    raise SolverError(f"{method}: the active-set loop did not settle in {limit} steps")

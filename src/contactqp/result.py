@@ -1,0 +1,233 @@
+"""The Result of a solve and its independent check.
+
+A method hands back its displacements and contact forces (a :class:`Solution`); everything
+else is derived here from those two alone, the same way for every method, and checked against
+the scene: equilibrium at every node, feasibility at every wall, complementarity and the sign of
+every contact force. No solver's own status is trusted; it is recorded beside the check.
+
+Residuals (all dimensionless, ∞-norms):
+    equilibrium      ‖K u − P − R − W‖ / F, W the walls' forces on the bar, R the reactions,
+                     F the largest nodal force term (loads, internal forces, reactions, walls)
+    feasibility      inequality: max(0, max penetration) / U; equality: max |penetration| / U,
+                     U the displacement scale max(‖u‖, largest gap)
+    complementarity  max |λᵢ · penetrationᵢ| / (F · U)          (inequality contact)
+    sign             max(0, −min λ) / F: how hard a wall pulls   (inequality contact)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from contactqp.model import Model, element_forces, internal_forces, penetration, wall_forces
+from contactqp.scene import Scene
+
+_TINY = 1e-300
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Largest residuals a verified Result may have (dimensionless, see the module docstring).
+
+    The explicit Lagrange method reaches ~1e-15. Equilibrium and sign are held to 1e-6 of the
+    force scale. Feasibility and complementarity are held to 1e-5 of the displacement scale
+    (10 nm on the default scene): that accepts the textbook penalty ε = 1e14, which leaves
+    1.8e-6 there, and rejects ε <= 1e13 and first-order QP solvers at loose settings.
+    """
+
+    equilibrium: float = 1e-6
+    feasibility: float = 1e-5
+    complementarity: float = 1e-5
+    sign: float = 1e-6
+
+
+TOLERANCES = Tolerances()
+
+
+@dataclass(frozen=True)
+class Solution:
+    """What a method returns: free-node displacements (m) and one contact force per wall (N)."""
+
+    u_free: np.ndarray
+    contact_force: np.ndarray
+    solver: str
+    iterations: int = 1
+    status: str = "solved"  # the solver's own claim, recorded, never trusted
+    claimed_success: bool = True
+    info: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Check:
+    """The independent check of a Result."""
+
+    residuals: dict[str, float | None]
+    verified: bool
+    physical: bool
+    message: str
+
+
+def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.ndarray,
+          contact: str, tolerances: Tolerances = TOLERANCES) -> Check:
+    """Check displacements (m, every node) and forces (N) against the scene, independently of
+    how they were found. ``contact`` is "inequality" or "equality"."""
+    loads = scene.nodal_loads()
+    internal = internal_forces(scene.bar, u)
+    walls = wall_forces(scene, contact_force)
+    support_forces = np.zeros(scene.n_nodes)
+    support_forces[[s.node for s in scene.supports]] = reactions
+    force_scale = max(_norm(loads), _norm(internal), _norm(walls), _norm(support_forces), _TINY)
+    gaps = np.array([w.gap for w in scene.walls], dtype=float)
+    disp_scale = max(_norm(u), _norm(gaps), _TINY)
+    pen = penetration(scene, u)
+    lam = np.asarray(contact_force, dtype=float)
+    equilibrium = _norm(internal - loads - support_forces - walls) / force_scale
+    pulling = max(0.0, -float(lam.min(initial=0.0))) / force_scale
+    if contact == "equality":
+        feasibility = _norm(pen) / disp_scale
+        residuals = {"equilibrium": equilibrium, "feasibility": feasibility,
+                     "complementarity": None, "sign": None}
+    else:
+        feasibility = max(0.0, float(pen.max(initial=0.0))) / disp_scale
+        complementarity = _norm(lam * pen) / (force_scale * disp_scale)
+        residuals = {"equilibrium": equilibrium, "feasibility": feasibility,
+                     "complementarity": complementarity, "sign": pulling}
+    failures = [
+        f"{name} residual {value:.2e} > {getattr(tolerances, name):.0e}"
+        for name, value in residuals.items()
+        if value is not None and not value <= getattr(tolerances, name)  # NaN fails too
+    ]
+    physical = pulling <= tolerances.sign
+    notes = list(failures)
+    if not physical:
+        which = ", ".join(f"wall[{i}] {lam[i]:.6g} N" for i in np.flatnonzero(lam < 0))
+        notes.append(f"non-physical: a wall pulls the bar ({which}); a rigid wall can only push")
+    return Check(residuals, not failures, physical, "; ".join(notes))
+
+
+def _norm(values: np.ndarray) -> float:
+    values = np.asarray(values, dtype=float)
+    if values.size == 0:
+        return 0.0
+    if not np.all(np.isfinite(values)):
+        return math.inf
+    return float(np.abs(values).max())
+
+
+@dataclass(frozen=True, eq=False)
+class Result:
+    """Everything one solve found, in physical words, with its independent check.
+
+    Attributes
+    ----------
+    u : displacement of every node (m, +x), supports included.
+    contact_force : one per wall in scene order (N), positive when the wall pushes the bar.
+    reactions : one per support in scene order (N), the force the support applies in +x.
+    penetration : one per wall (m), positive when the node is past the wall.
+    element_force, stress : axial force (N) and stress (Pa) of each element, tension positive.
+    stress_ratio : largest |stress| over the yield stress (None without a yield stress).
+    residuals, verified, physical, message : the independent check (see :func:`check`).
+    status, claimed_success : what the solver itself said, recorded and not trusted.
+    time : wall time of the whole solve (s); timings splits it into build and solve.
+    """
+
+    scene: Scene
+    method: str
+    solver: str
+    contact: str
+    options: dict[str, Any]
+    u: np.ndarray
+    contact_force: np.ndarray
+    reactions: np.ndarray
+    penetration: np.ndarray
+    element_force: np.ndarray
+    stress: np.ndarray
+    stress_ratio: float | None
+    residuals: dict[str, float | None]
+    verified: bool
+    physical: bool
+    message: str
+    status: str
+    claimed_success: bool
+    iterations: int
+    time: float
+    timings: dict[str, float]
+    warnings: tuple[str, ...]
+
+    @property
+    def label(self) -> str:
+        """method (and solver where it says more), e.g. 'penalty' or 'qp/osqp'."""
+        return self.method if self.solver == self.method else f"{self.method}/{self.solver}"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (plain floats and lists)."""
+        return {
+            "scene": self.scene.name, "method": self.method, "solver": self.solver,
+            "contact": self.contact, "options": _plain(self.options),
+            "u": _plain(self.u), "contact_force": _plain(self.contact_force),
+            "reactions": _plain(self.reactions), "penetration": _plain(self.penetration),
+            "element_force": _plain(self.element_force), "stress": _plain(self.stress),
+            "stress_ratio": self.stress_ratio, "residuals": _plain(self.residuals),
+            "verified": self.verified, "physical": self.physical, "message": self.message,
+            "status": self.status, "claimed_success": self.claimed_success,
+            "iterations": self.iterations, "time": self.time, "timings": _plain(self.timings),
+            "warnings": list(self.warnings),
+        }
+
+    def to_json(self, indent: int | None = 2) -> str:
+        return json.dumps(self.to_dict(), indent=indent, allow_nan=False)
+
+
+def _plain(value: Any) -> Any:
+    """numpy → Python, non-finite floats → None (JSON has no NaN)."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+def make_result(model: Model, solution: Solution, *, method: str, contact: str,
+                options: dict[str, Any], timings: dict[str, float],
+                tolerances: Tolerances = TOLERANCES) -> Result:
+    """Build the Result of a solution: derive every quantity from u and λ, then check it."""
+    scene = model.scene
+    u = model.full_displacements(np.asarray(solution.u_free, dtype=float))
+    lam = np.asarray(solution.contact_force, dtype=float).reshape(-1)
+    supports = np.array([s.node for s in scene.supports], dtype=int)
+    # reactions are what equilibrium at the supports needs; the check then tests the free nodes
+    reactions = (internal_forces(scene.bar, u) - scene.nodal_loads() - wall_forces(scene, lam))[supports]
+    forces = element_forces(scene.bar, u)
+    stress = forces / scene.bar.areas
+    yield_stress = scene.bar.yield_stress
+    ratio = None if yield_stress is None else float(np.abs(stress).max() / yield_stress)
+    found = check(scene, u, lam, reactions, contact, tolerances)
+    warnings: list[str] = []
+    if ratio is not None and ratio > 1.0:
+        e = int(np.abs(stress).argmax())
+        warnings.append(
+            f"stress beyond yield: element {e} carries {stress[e] / 1e6:.1f} MPa, "
+            f"{ratio:.2f} x the yield stress {yield_stress / 1e6:.0f} MPa (a linear-elastic "
+            "answer past yield)"
+        )
+    if solution.claimed_success and not found.verified:
+        warnings.append(f"{solution.solver} reported {solution.status!r} but the check failed")
+    return Result(
+        scene=scene, method=method, solver=solution.solver, contact=contact,
+        options=dict(options), u=u, contact_force=lam, reactions=reactions,
+        penetration=penetration(scene, u), element_force=forces, stress=stress,
+        stress_ratio=ratio, residuals=found.residuals, verified=found.verified,
+        physical=found.physical, message=found.message, status=solution.status,
+        claimed_success=solution.claimed_success, iterations=solution.iterations,
+        time=sum(timings.values()), timings=dict(timings), warnings=tuple(warnings),
+    )
