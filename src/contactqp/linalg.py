@@ -42,14 +42,15 @@ def solve(matrix: sp.sparray, rhs: np.ndarray, *, spd: bool = False,
     ``order``: a permutation of the unknowns that makes the matrix narrow, if one is known.
     Raises SolverError when the matrix is singular (or, with ``spd``, not positive definite).
     """
-    coo = sp.coo_array(matrix)
+    csr = sp.csr_array(matrix)
+    csr.sum_duplicates()  # free when already canonical; a permutation adds no duplicates
+    coo = csr.tocoo()
     rhs = np.asarray(rhs, dtype=float)
     if order is not None:
         position = np.empty_like(order)
         position[order] = np.arange(order.size)
         coo = sp.coo_array((coo.data, (position[coo.row], position[coo.col])), shape=coo.shape)
         rhs = rhs[order]
-    coo.sum_duplicates()
     lower, upper = _bandwidths(coo)
     try:
         if max(lower, upper) <= MAX_BANDWIDTH and spd:

@@ -10,9 +10,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from contactqp import linalg
+from contactqp.methods._active_set import active_set_loop
 from contactqp.model import Model
 from contactqp.result import Solution
-from contactqp.methods._active_set import active_set_loop
 
 # An active-set decision ignores penetrations and pulls below this fraction of the
 # displacement and force scales: round-off, not contact.

@@ -12,9 +12,9 @@ import numpy as np
 
 from contactqp import linalg
 from contactqp.errors import OptionError
+from contactqp.methods._active_set import active_set_loop
 from contactqp.model import Model
 from contactqp.result import Solution
-from contactqp.methods._active_set import active_set_loop
 
 DEFAULT_PENALTY = 1e14  # N/m, as in the textbook example
 

@@ -1,0 +1,208 @@
+"""Command line: ``contactqp`` (every method on the default scene), ``solve``, ``penalty-sweep``,
+``solvers``. Bad input ends with one line on stderr naming the field and the value, exit 2."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from contactqp.errors import ContactqpError
+from contactqp.methods import CONTACT_KINDS, METHODS, solve
+from contactqp.result import Result
+from contactqp.scene import Scene, load_scene, seed_scene
+from contactqp.studies import PenaltySweep, Run, compare, penalty_sweep
+
+DEFAULT_OUT = "contactqp-out"
+
+
+def _scene(path: str | None) -> Scene:
+    return seed_scene() if path is None else load_scene(path)
+
+
+def _values(values: np.ndarray, digits: int) -> str:
+    return ", ".join(f"{v:.{digits}g}" for v in values) if len(values) else "-"
+
+
+def _largest_residual(result: Result) -> float:
+    return max(v for v in result.residuals.values() if v is not None)
+
+
+def table(runs: list[Run]) -> str:
+    """The comparison table: one row per method and contact kind."""
+    header = ("method", "contact", "contact force (N)", "penetration (m)", "support reaction (N)",
+              "residual", "verified", "time (ms)")
+    rows = []
+    for run in runs:
+        r = run.result
+        if r is None:
+            rows.append((run.label, run.contact, f"failed: {run.error}", "", "", "", "no", ""))
+            continue
+        verified = "yes" if r.verified else "NO"
+        if not r.physical:
+            verified += " (pulls)"
+        rows.append((run.label, r.contact, _values(r.contact_force, 10), _values(r.penetration, 3),
+                     _values(r.reactions, 10), f"{_largest_residual(r):.1e}", verified,
+                     f"{1e3 * r.time:.2f}"))
+    widths = [max(len(str(row[i])) for row in (header, *rows)) for i in range(len(header))]
+    lines = ["  ".join(str(c).ljust(w) for c, w in zip(row, widths)).rstrip()
+             for row in (header, *rows)]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def notes(runs: list[Run]) -> list[str]:
+    """What the table alone does not say: failed checks, pulling walls, stress past yield."""
+    out: list[str] = []
+    for run in runs:
+        r = run.result
+        if r is not None and r.message:
+            out.append(f"{run.label} ({run.contact}): {r.message}")
+    stresses = {w for run in runs if run.result is not None for w in run.result.warnings
+                if w.startswith("stress")}
+    out.extend(sorted(stresses))
+    return out
+
+
+def _write_charts(result: Result, sweep: PenaltySweep, out: Path) -> list[str]:
+    from contactqp import plot  # matplotlib only when charts are asked for
+
+    out.mkdir(parents=True, exist_ok=True)
+    return [plot.save(plot.plot_bar(result), out / "bar.png"),
+            plot.save(plot.plot_penalty_sweep(sweep), out / "penalty_sweep.png")]
+
+
+def command_compare(args: argparse.Namespace) -> int:
+    scene = _scene(args.scene)
+    runs = compare(scene)
+    print(f"scene: {scene.name} ({scene.bar.n_elements} elements, {len(scene.walls)} wall(s))")
+    print(table(runs))
+    for line in notes(runs):
+        print(f"note: {line}")
+    reference = next(r.result for r in runs if r.label == "lagrange" and r.result is not None)
+    if not args.no_charts:
+        for path in _write_charts(reference, penalty_sweep(scene), Path(args.out)):
+            print(f"chart: {path}")
+    return 0 if all(r.result is not None for r in runs) else 1
+
+
+def _qp_options(args: argparse.Namespace) -> dict[str, Any]:
+    given = {"backend": args.backend, "solver": args.solver, "accuracy": args.accuracy,
+             "scale": None if args.scale is None else args.scale == "on"}
+    return {k: v for k, v in given.items() if v is not None}
+
+
+def command_solve(args: argparse.Namespace) -> int:
+    options: dict[str, Any] = {}
+    if args.penalty is not None:
+        options["penalty"] = args.penalty
+    options.update(_qp_options(args))
+    result = solve(_scene(args.scene), args.method, args.contact, **options)
+    if args.json:
+        print(result.to_json())
+    else:
+        print(table([Run(result.label, result.contact, result)]))
+        for line in notes([Run(result.label, result.contact, result)]):
+            print(f"note: {line}")
+    return 0
+
+
+def command_penalty_sweep(args: argparse.Namespace) -> int:
+    scene = _scene(args.scene)
+    sweep = penalty_sweep(scene, contact=args.contact)
+    if args.json:
+        print(json.dumps({
+            "penalty": sweep.penalties.tolist(),
+            "contact_force": [None if r.result is None else r.result.to_dict()["contact_force"]
+                              for r in sweep.runs],
+            "penetration": [None if r.result is None else r.result.to_dict()["penetration"]
+                            for r in sweep.runs],
+            "force_error": [v if np.isfinite(v) else None for v in sweep.force_error.tolist()],
+            "verified": [r.result is not None and r.result.verified for r in sweep.runs],
+            "reference_contact_force": sweep.reference.contact_force.tolist(),
+            "converged_up_to": float(sweep.penalties[sweep.best]),
+        }, indent=2))
+        return 0
+    print(f"penalty sweep, {scene.name}, {args.contact} contact; Lagrange contact force "
+          f"{_values(sweep.reference.contact_force, 10)} N")
+    print(f"{'ε (N/m)':>9}  {'contact force (N)':>20}  {'penetration (m)':>16}  "
+          f"{'force error':>11}  verified")
+    for eps, run, error in zip(sweep.penalties, sweep.runs, sweep.force_error):
+        if run.result is None:
+            print(f"{eps:9.0e}  failed: {run.error}")
+            continue
+        r = run.result
+        print(f"{eps:9.0e}  {_values(r.contact_force, 10):>20}  {_values(r.penetration, 4):>16}  "
+              f"{error:11.2e}  {'yes' if r.verified else 'NO'}")
+    print(sweep.summary())
+    if not args.no_charts:
+        from contactqp import plot
+
+        Path(args.out).mkdir(parents=True, exist_ok=True)
+        print(f"chart: {plot.save(plot.plot_penalty_sweep(sweep), Path(args.out) / 'penalty_sweep.png')}")
+    return 0
+
+
+def command_solvers(args: argparse.Namespace) -> int:
+    from contactqp.methods.qp import solver_table
+
+    print(solver_table())
+    return 0
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, no usage block
+        self.exit(2, f"contactqp: error: {message} (see contactqp --help)\n")
+
+
+def parser() -> argparse.ArgumentParser:
+    top = _Parser(prog="contactqp", description="Contact of elastic bars by Lagrange "
+                  "multipliers, penalty and QP solvers. With no command: every method on the "
+                  "default scene, one comparison table and charts.")
+    top.add_argument("--out", default=DEFAULT_OUT, help="folder for charts (default %(default)s)")
+    top.add_argument("--no-charts", action="store_true", help="write no PNG files")
+    top.set_defaults(handler=command_compare, scene=None)
+    commands = top.add_subparsers(dest="command", parser_class=_Parser)
+
+    def scene_command(name: str, handler, help_text: str) -> argparse.ArgumentParser:
+        sub = commands.add_parser(name, help=help_text, description=help_text)
+        sub.add_argument("scene", nargs="?", help="scene TOML file (default: the default scene)")
+        sub.add_argument("--out", default=DEFAULT_OUT, help="folder for charts")
+        sub.add_argument("--no-charts", action="store_true", help="write no PNG files")
+        sub.set_defaults(handler=handler)
+        return sub
+
+    scene_command("compare", command_compare, "every method on a scene, one table")
+    solve_parser = scene_command("solve", command_solve, "solve a scene by one method")
+    solve_parser.add_argument("--method", default="lagrange", choices=list(METHODS))
+    solve_parser.add_argument("--contact", default="inequality", choices=CONTACT_KINDS)
+    solve_parser.add_argument("--penalty", type=float, help="penalty ε (N/m), method penalty")
+    solve_parser.add_argument("--backend", help="QP backend, method qp (see contactqp solvers)")
+    solve_parser.add_argument("--solver", help="QP solver of the backend, method qp")
+    solve_parser.add_argument("--accuracy", choices=("default", "high"), help="method qp")
+    solve_parser.add_argument("--scale", choices=("on", "off"), help="non-dimensionalise the QP")
+    solve_parser.add_argument("--json", action="store_true", help="print the Result as JSON")
+    sweep_parser = scene_command("penalty-sweep", command_penalty_sweep,
+                                 "penetration and contact force for ε = 1, 1e5, 1e6 … 1e20")
+    sweep_parser.add_argument("--contact", default="inequality", choices=CONTACT_KINDS)
+    sweep_parser.add_argument("--json", action="store_true", help="print the sweep as JSON")
+    commands.add_parser("solvers", help="installed QP backends and solvers, and how to add more"
+                        ).set_defaults(handler=command_solvers)
+    return top
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    try:
+        return args.handler(args)
+    except ContactqpError as error:
+        print(f"contactqp: error: {error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
