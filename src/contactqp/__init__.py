@@ -4,20 +4,34 @@ Scene → model (K, P, C, g) → method → checked Result. See the README for t
 """
 
 from contactqp.errors import (
-    ContactqpError, OptionError, SceneError, SolverError, SolverNotAvailable,
+    ContactqpError,
+    OptionError,
+    SceneError,
+    SolverError,
+    SolverNotAvailable,
 )
 from contactqp.methods import CONTACT_KINDS, METHODS, solve
+from contactqp.methods.qp import QPProblem, available_qp_solvers, qp_problem
 from contactqp.model import Model, build_model
 from contactqp.result import TOLERANCES, Result, Tolerances, check
 from contactqp.scene import (
-    Bar, Load, Scene, Support, Wall, load_scene, scene_from_dict, scene_to_toml, seed_scene,
+    Bar,
+    Load,
+    Scene,
+    Support,
+    Wall,
+    load_scene,
+    minimal,
+    scene_from_dict,
+    scene_to_toml,
+    seed_scene,
 )
 
 __version__ = "0.1.0"
 
 __all__ = [
     "CONTACT_KINDS", "METHODS", "TOLERANCES", "Bar", "ContactqpError", "Load", "Model",
-    "OptionError", "Result", "Scene", "SceneError", "SolverError", "SolverNotAvailable",
-    "Support", "Tolerances", "Wall", "__version__", "build_model", "check", "load_scene",
-    "scene_from_dict", "scene_to_toml", "seed_scene", "solve",
+    "OptionError", "QPProblem", "Result", "Scene", "SceneError", "SolverError", "SolverNotAvailable",
+    "Support", "Tolerances", "Wall", "__version__", "available_qp_solvers", "build_model",
+    "check", "load_scene", "minimal", "qp_problem", "scene_from_dict", "scene_to_toml", "seed_scene", "solve",
 ]

@@ -15,7 +15,7 @@ from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, METHODS, solve
 from contactqp.result import Result
 from contactqp.scene import Scene, load_scene, seed_scene
-from contactqp.studies import PenaltySweep, Run, compare, penalty_sweep
+from contactqp.studies import PenaltySweep, Run, compare, mesh_convergence, penalty_sweep
 
 DEFAULT_OUT = "contactqp-out"
 
@@ -62,9 +62,10 @@ def notes(runs: list[Run]) -> list[str]:
         r = run.result
         if r is not None and r.message:
             out.append(f"{run.label} ({run.contact}): {r.message}")
-    stresses = {w for run in runs if run.result is not None for w in run.result.warnings
-                if w.startswith("stress")}
-    out.extend(sorted(stresses))
+    reference = next((run.result for run in runs if run.result is not None and run.result.verified),
+                     None)  # one stress note, from the first verified answer
+    if reference is not None:
+        out.extend(f"{reference.label}: {w}" for w in reference.warnings if w.startswith("stress"))
     return out
 
 
@@ -73,7 +74,8 @@ def _write_charts(result: Result, sweep: PenaltySweep, out: Path) -> list[str]:
 
     out.mkdir(parents=True, exist_ok=True)
     return [plot.save(plot.plot_bar(result), out / "bar.png"),
-            plot.save(plot.plot_penalty_sweep(sweep), out / "penalty_sweep.png")]
+            plot.save(plot.plot_penalty_sweep(sweep), out / "penalty_sweep.png"),
+            plot.save(plot.plot_mesh_convergence(mesh_convergence()), out / "mesh_convergence.png")]
 
 
 def command_compare(args: argparse.Namespace) -> int:

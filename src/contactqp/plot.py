@@ -8,7 +8,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from contactqp.result import Result
-from contactqp.studies import PenaltySweep
+from contactqp.studies import MeshConvergence, PenaltySweep
 
 
 def _axes(ax: Axes | None, size: tuple[float, float] = (8, 3.5)) -> Axes:
@@ -55,27 +55,55 @@ def plot_bar(result: Result, ax: Axes | None = None, magnification: float | None
     return ax
 
 
-def plot_penalty_sweep(sweep: PenaltySweep, ax: Axes | None = None) -> Axes:
-    """Penetration (left axis) and contact-force error against Lagrange (right axis) over ε."""
-    ax = _axes(ax, (7, 4))
+def plot_penalty_sweep(sweep: PenaltySweep) -> Figure:
+    """Two panels over ε: the penalty's penetration; the contact-force error against Lagrange
+    of the penalty and of the augmented Lagrangian method (with its number of updates)."""
+    figure = Figure(figsize=(11, 4.2), layout="constrained")
+    left, right = figure.subplots(1, 2)
+    eps = sweep.penalties
     ok = np.isfinite(sweep.penetration) & (sweep.penetration > 0)
-    ax.loglog(sweep.penalties[ok], sweep.penetration[ok], "o-", color="tab:blue",
-              label="penetration (m)")
-    ax.set_xlabel("penalty ε (N/m)")
-    ax.set_ylabel("largest penetration (m)", color="tab:blue")
-    twin = ax.twinx()
-    good = np.isfinite(sweep.force_error) & (sweep.force_error > 0)
-    twin.loglog(sweep.penalties[good], sweep.force_error[good], "s--", color="tab:red",
-                label="force error")
-    twin.set_ylabel("relative contact-force error vs Lagrange", color="tab:red")
-    twin.axvline(sweep.penalties[sweep.best], color="0.5", linestyle=":")
-    twin.annotate("round-off takes over →", (sweep.penalties[sweep.best], sweep.force_error[good].max()
-                  if good.any() else 1), fontsize=8, ha="left", va="top", color="0.3")
-    ax.set_title(f"penalty sweep: {sweep.reference.scene.name}")
+    left.loglog(eps[ok], sweep.penetration[ok], "o-", color="tab:blue")
+    left.set_xlabel("penalty ε (N/m)")
+    left.set_ylabel("largest penetration (m)")
+    left.set_title("penalty: penetration ≈ λ/ε")
+    floor = 1e-17  # errors of exactly 0 are drawn here, on a log axis
+    for errors, style, name in ((sweep.force_error, "s--", "penalty"),
+                                (sweep.augmented_error, "o-", "augmented Lagrangian")):
+        good = np.isfinite(errors)
+        right.loglog(eps[good], np.maximum(errors[good], floor), style, label=name)
+    for x, y, n in zip(eps, sweep.augmented_error, sweep.augmented_iterations):
+        if np.isfinite(y):
+            right.annotate(str(n), (x, max(y, floor)), textcoords="offset points", xytext=(0, 6),
+                           fontsize=7, ha="center", color="tab:orange")
+    right.axvline(eps[sweep.best], color="0.5", linestyle=":")
+    right.annotate("round-off takes over → ", (eps[sweep.best], 1.0), fontsize=8, va="top",
+                   ha="right", color="0.3")
+    right.set_xlabel("penalty ε (N/m)")
+    right.set_ylabel("relative contact-force error vs Lagrange")
+    right.set_title("force error (numbers: augmented updates)")
+    right.legend(fontsize=8)
+    figure.suptitle(f"penalty sweep: {sweep.reference.scene.name}")
+    return figure
+
+
+def plot_mesh_convergence(study: MeshConvergence, ax: Axes | None = None) -> Axes:
+    """Contact-force error against the continuum over the number of elements, both area rules,
+    with an O(h²) guide through the midpoint rule's first point."""
+    ax = _axes(ax, (6, 4.2))
+    floor = 1e-17  # exact zeros drawn here on the log axis
+    n = study.elements
+    for rule, style in (("midpoint", "o-"), ("exact", "s-")):
+        ax.loglog(n, np.maximum(study.errors[rule], floor), style, label=f"area rule {rule!r}")
+    first = study.errors["midpoint"][0]
+    ax.loglog(n, first * (n[0] / n) ** 2, "k:", label="O(h²)")
+    ax.set_xlabel("elements")
+    ax.set_ylabel("relative contact-force error vs the continuum")
+    ax.set_title("tapered bar: midpoint areas O(h²), exact areas exact")
+    ax.legend(fontsize=8)
     return ax
 
 
-def save(ax: Axes, path) -> str:
-    """Write the figure of ``ax`` as PNG; returns the path."""
-    ax.figure.savefig(path, dpi=120)
+def save(chart: Axes | Figure, path) -> str:
+    """Write the figure (of the axes) as PNG; returns the path."""
+    (chart if isinstance(chart, Figure) else chart.figure).savefig(path, dpi=120)
     return str(path)

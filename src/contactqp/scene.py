@@ -292,23 +292,68 @@ SEED_LOAD_NODE, SEED_LOAD = 2, 565486.67  # N
 SEED_GAP = 1e-4  # m
 
 
-def seed_scene() -> Scene:
+def seed_scene(elements: int = SEED_ELEMENTS, area_rule: AreaRule = "midpoint") -> Scene:
     """The default scene: a 1 m tapered cantilever pushed into a wall 0.1 mm past its tip.
 
     Fixed at x = 0; circular section from 40 mm to 20 mm diameter; E = 210 GPa, yield stress
     200 MPa; four equal elements with the area of the circle at mid-length; 565486.67 N in +x
-    at node 2; a rigid wall 0.1 mm beyond node 4 in +x.
+    at node 2 (mid-length); a rigid wall 0.1 mm beyond the tip in +x. ``elements`` (even) and
+    ``area_rule`` re-mesh the same bar, for convergence studies.
     """
+    if isinstance(elements, bool) or not isinstance(elements, int) or elements < 2 or elements % 2:
+        raise SceneError(f"elements must be an even whole number >= 2 (load at mid-length), "
+                         f"got {elements!r}")
     bar = Bar.tapered_circle(
-        SEED_LENGTH, SEED_ELEMENTS, *SEED_DIAMETERS, SEED_MODULUS,
-        area_rule="midpoint", yield_stress=SEED_YIELD,
+        SEED_LENGTH, elements, *SEED_DIAMETERS, SEED_MODULUS,
+        area_rule=area_rule, yield_stress=SEED_YIELD,
     )
+    name = "seed: tapered cantilever against a wall"
+    if (elements, area_rule) != (SEED_ELEMENTS, "midpoint"):
+        name += f" ({elements} elements, {area_rule} areas)"
     return Scene(
         bar,
         supports=(Support(0),),
-        loads=(Load(SEED_LOAD_NODE, SEED_LOAD),),
-        walls=(Wall(SEED_ELEMENTS, SEED_GAP, "+"),),
-        name="seed: tapered cantilever against a wall",
+        loads=(Load(elements // 2, SEED_LOAD),),
+        walls=(Wall(elements, SEED_GAP, "+"),),
+        name=name,
+    )
+
+
+def needed_nodes(scene: Scene) -> np.ndarray:
+    """The nodes a scene needs: both ends, supports, loads and walls (sorted node numbers)."""
+    nodes = {0, scene.n_nodes - 1}
+    nodes.update(s.node for s in scene.supports)
+    nodes.update(p.node for p in scene.loads)
+    nodes.update(w.node for w in scene.walls)
+    return np.array(sorted(nodes))
+
+
+def minimal(scene: Scene) -> Scene:
+    """The same scene with nodes only where it needs them (:func:`needed_nodes`).
+
+    The elements between two kept nodes become one element with their series flexibility
+    Σ L/(EA), so displacements at the kept nodes, contact forces, reactions and element forces
+    are exactly those of the original model (static condensation of unloaded nodes). Stresses
+    are those of the merged element's equivalent area: for a taper meshed with
+    ``area_rule="exact"`` that is the exact cone's, and one element per segment reproduces the
+    continuum answer.
+    """
+    kept = needed_nodes(scene)
+    new_number = np.full(scene.n_nodes, -1)
+    new_number[kept] = np.arange(kept.size)
+    bar = scene.bar
+    flexibility = np.concatenate(([0.0], np.cumsum(1.0 / bar.stiffness)))[kept]
+    x = bar.node_x[kept]
+    lengths = np.diff(x)
+    modulus = bar.youngs_modulus[np.searchsorted(bar.node_x, x[:-1], side="right") - 1]
+    areas = lengths / (modulus * np.diff(flexibility))  # E A / L = 1 / Σ L/(EA)
+    merged = Bar(lengths, areas, modulus, bar.yield_stress)
+    return Scene(
+        merged,
+        tuple(Support(int(new_number[s.node])) for s in scene.supports),
+        tuple(Load(int(new_number[p.node]), p.force) for p in scene.loads),
+        tuple(Wall(int(new_number[w.node]), w.gap, w.side) for w in scene.walls),
+        name=f"{scene.name} (minimal mesh)",
     )
 
 
@@ -420,5 +465,5 @@ def scene_to_toml(scene: Scene) -> str:
 
 __all__ = [
     "AREA_RULES", "Bar", "Load", "Scene", "Support", "Wall", "circle_areas", "load_scene",
-    "scene_from_dict", "scene_to_toml", "seed_scene",
+    "minimal", "needed_nodes", "scene_from_dict", "scene_to_toml", "seed_scene",
 ]

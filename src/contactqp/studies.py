@@ -10,7 +10,9 @@ from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, solve
 from contactqp.methods.penalty import DEFAULT_PENALTY
 from contactqp.result import Result
-from contactqp.scene import Scene, seed_scene
+from contactqp.scene import (
+    SEED_DIAMETERS, SEED_GAP, SEED_LENGTH, SEED_LOAD, SEED_MODULUS, Scene, seed_scene,
+)
 
 SWEEP_PENALTIES = (1.0,) + tuple(10.0 ** k for k in range(5, 21))  # N/m: 1, 1e5, 1e6 … 1e20
 
@@ -27,13 +29,12 @@ class Run:
 
 def method_runs() -> list[tuple[str, dict]]:
     """(method, options) of every run in a comparison, one per installed solver."""
-    runs: list[tuple[str, dict]] = [("lagrange", {}), ("penalty", {})]
-    try:
-        from contactqp.methods.qp import available_qp_solvers
-    except ImportError:  # QP backends not part of this build
-        return runs
-    for backend, solver in available_qp_solvers():
-        runs.append(("qp", {"backend": backend, "solver": solver}))
+    runs: list[tuple[str, dict]] = [("lagrange", {}), ("penalty", {}), ("augmented", {})]
+    from contactqp.methods.qp import available_qp_solvers
+
+    for info in available_qp_solvers():
+        if info.available:
+            runs.append(("qp", {"backend": info.backend, "solver": info.solver}))
     return runs
 
 
@@ -60,11 +61,12 @@ def compare(scene: Scene | None = None, contacts: tuple[str, ...] = CONTACT_KIND
 
 @dataclass(frozen=True)
 class PenaltySweep:
-    """Penalty solves over a range of ε against the Lagrange solution of the same scene.
+    """Penalty and augmented-Lagrangian solves over a range of ε against the Lagrange solution.
 
     ``force_error`` is the largest relative contact-force error against Lagrange (NaN where the
-    solve failed). ``best`` is the index of the smallest error: the sweep converges up to it,
-    and beyond it round-off takes over.
+    solve failed); ``augmented_error`` and ``augmented_iterations`` the same for the augmented
+    method at the same ε. ``best`` is the index of the penalty's smallest error: the sweep
+    converges up to it, and beyond it round-off takes over.
     """
 
     penalties: np.ndarray
@@ -73,6 +75,9 @@ class PenaltySweep:
     force_error: np.ndarray
     penetration: np.ndarray
     best: int
+    augmented_runs: tuple[Run, ...]
+    augmented_error: np.ndarray
+    augmented_iterations: np.ndarray
 
     def summary(self) -> str:
         best = self.penalties[self.best]
@@ -87,26 +92,73 @@ class PenaltySweep:
         return text
 
 
+def _sweep_runs(scene: Scene, method: str, penalties: tuple[float, ...], contact: str,
+                reference: Result) -> tuple[tuple[Run, ...], np.ndarray]:
+    """One run of ``method`` per ε, and each run's relative force error against ``reference``."""
+    scale = max(float(np.abs(reference.contact_force).max(initial=0.0)), 1e-300)
+    runs, errors = [], []
+    for eps in penalties:
+        label = f"{method} ε={eps:.0e}"
+        try:
+            result = solve(scene, method, contact, penalty=eps)
+        except ContactqpError as error:
+            runs.append(Run(label, contact, None, str(error)))
+            errors.append(np.nan)
+            continue
+        runs.append(Run(label, contact, result))
+        difference = np.abs(result.contact_force - reference.contact_force).max(initial=0.0)
+        errors.append(float(difference) / scale)
+    return tuple(runs), np.array(errors)
+
+
 def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] = SWEEP_PENALTIES,
                   contact: str = "inequality") -> PenaltySweep:
-    """Penetration and contact force of the penalty method for each ε in ``penalties``."""
+    """Penetration and contact force of the penalty method (and of the augmented Lagrangian
+    method with the same ε) for each ε in ``penalties``."""
     scene = seed_scene() if scene is None else scene
     reference = solve(scene, "lagrange", contact)
-    scale = max(float(np.abs(reference.contact_force).max(initial=0.0)), 1e-300)
-    runs, errors, depths = [], [], []
-    for eps in penalties:
-        try:
-            result = solve(scene, "penalty", contact, penalty=eps)
-        except ContactqpError as error:
-            runs.append(Run(run_label("penalty", {"penalty": eps}), contact, None, str(error)))
-            errors.append(np.nan)
-            depths.append(np.nan)
-            continue
-        runs.append(Run(run_label("penalty", {"penalty": eps}), contact, result))
-        errors.append(float(np.abs(result.contact_force - reference.contact_force).max(initial=0.0))
-                      / scale)
-        depths.append(float(result.penetration.max(initial=0.0)))
-    errors_array = np.array(errors)
-    best = int(np.nanargmin(errors_array)) if np.any(np.isfinite(errors_array)) else 0
-    return PenaltySweep(np.array(penalties, dtype=float), tuple(runs), reference, errors_array,
-                        np.array(depths), best)
+    runs, errors = _sweep_runs(scene, "penalty", penalties, contact, reference)
+    augmented, augmented_errors = _sweep_runs(scene, "augmented", penalties, contact, reference)
+    depths = np.array([np.nan if r.result is None else float(r.result.penetration.max(initial=0.0))
+                       for r in runs])
+    iterations = np.array([0 if r.result is None else r.result.iterations for r in augmented])
+    best = int(np.nanargmin(errors)) if np.any(np.isfinite(errors)) else 0
+    return PenaltySweep(np.array(penalties, dtype=float), runs, reference, errors, depths, best,
+                        augmented, augmented_errors, iterations)
+
+
+def cone_flexibility(a: float, b: float) -> float:
+    """∫ₐᵇ dx / (E·A(x)) of the default scene's conical bar (m/N): 4(b − a)/(E·π·d(a)·d(b))."""
+    d0, d1 = SEED_DIAMETERS
+
+    def diameter(x: float) -> float:
+        return d0 + (d1 - d0) * x / SEED_LENGTH
+
+    return 4.0 * (b - a) / (SEED_MODULUS * np.pi * diameter(a) * diameter(b))
+
+
+def cone_contact_force() -> float:
+    """The continuum contact force of the default scene (N): λ = (F·f(0, L/2) − g) / f(0, L)."""
+    free_tip = SEED_LOAD * cone_flexibility(0.0, SEED_LENGTH / 2)
+    return (free_tip - SEED_GAP) / cone_flexibility(0.0, SEED_LENGTH)
+
+
+@dataclass(frozen=True)
+class MeshConvergence:
+    """Relative contact-force error of the default scene against the continuum, per mesh."""
+
+    elements: np.ndarray
+    errors: dict[str, np.ndarray]  # area rule -> |λ_h − λ| / λ
+    exact_force: float
+
+
+def mesh_convergence(elements: tuple[int, ...] = (2, 4, 8, 16, 32, 64, 128, 256, 512, 1024)
+                     ) -> MeshConvergence:
+    """Solve the default scene on finer and finer meshes with both area rules."""
+    exact = cone_contact_force()
+    errors = {
+        rule: np.array([abs(solve(seed_scene(n, rule)).contact_force[0] - exact) / exact
+                        for n in elements])
+        for rule in ("midpoint", "exact")
+    }
+    return MeshConvergence(np.array(elements), errors, exact)

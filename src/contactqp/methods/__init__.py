@@ -12,17 +12,21 @@ from collections.abc import Callable
 from typing import Any
 
 from contactqp.errors import OptionError
+from contactqp.methods.augmented import solve_augmented
+from contactqp.methods.lagrange import solve_lagrange
+from contactqp.methods.penalty import solve_penalty
+from contactqp.methods.qp import solve_qp
 from contactqp.model import build_model
 from contactqp.result import Result, Solution, make_result
 from contactqp.scene import Scene, seed_scene
-from contactqp.methods.lagrange import solve_lagrange
-from contactqp.methods.penalty import solve_penalty
 
 CONTACT_KINDS = ("inequality", "equality")
 
 METHODS: dict[str, Callable[..., Solution]] = {
     "lagrange": solve_lagrange,
     "penalty": solve_penalty,
+    "augmented": solve_augmented,
+    "qp": solve_qp,
 }
 
 
@@ -65,7 +69,9 @@ def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "
     "inequality" (unilateral, the default) or "equality" (the textbook form).
 
     Methods and their options: "lagrange" (max_iterations), "penalty" (penalty ε in N/m,
-    default 1e14; max_iterations). Returns a checked :class:`Result`.
+    default 1e14; max_iterations), "qp" (backend "clarabel" (default), "osqp", "cvxpy" or
+    "qpsolvers"; solver, None for the backend's default; accuracy "default" or "high"; scale,
+    default True: see :mod:`contactqp.methods.qp`). Returns a checked :class:`Result`.
     """
     scene = seed_scene() if scene is None else scene
     function = _validate(method, contact, options)

@@ -17,14 +17,16 @@ def default_max_iterations(n_walls: int) -> int:
 
 
 def active_set_loop(n_walls: int, step: Step, update: Update, *, method: str,
-                    max_iterations: int | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+                    max_iterations: int | None = None,
+                    start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, int]:
     """Iterate ``active -> step(active) = (u, λ) -> update(active, u, λ)`` to a fixed point.
 
-    Starts with every wall open. Returns (u, λ, iterations). It terminates: a set that comes
-    back (a cycle) or more than ``max_iterations`` steps is a SolverError that says so.
+    Starts from ``start`` (default: every wall open). Returns (u, λ, iterations). It
+    terminates: a set that comes back (a cycle) or more than ``max_iterations`` steps is a
+    SolverError that says so.
     """
     limit = default_max_iterations(n_walls) if max_iterations is None else int(max_iterations)
-    active = np.zeros(n_walls, dtype=bool)
+    active = np.zeros(n_walls, dtype=bool) if start is None else np.asarray(start, dtype=bool)
     seen = {active.tobytes()}
     for iteration in range(1, limit + 1):
         u, lam = step(active)

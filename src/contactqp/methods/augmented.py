@@ -1,0 +1,72 @@
+"""The augmented Lagrangian method (Uzawa): a moderate penalty plus multiplier updates.
+
+For fixed multipliers λ the displacements minimise
+    Π(D) + Σᵢ [max(0, λᵢ + ε(CᵢD − gᵢ))² − λᵢ²] / (2ε)
+(unilateral contact; for equality contact drop the max), which is the penalty system with the
+right-hand side shifted by the multipliers:
+    (K + ε C_AᵀC_A) D = P − C_Aᵀ(λ_A − ε g_A),   A = walls with λᵢ + ε(CᵢD − gᵢ) > 0.
+Then λ ← max(0, λ + ε(C D − g)). Each update shrinks the force error by about 1/(1 + ε f)
+(f the flexibility at the wall), so a penalty that alone would leave a visible penetration
+converges to the exact contact force in a few updates, without the ill-conditioning of a
+penalty large enough to be accurate on its own.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from contactqp import linalg
+from contactqp.methods._active_set import active_set_loop
+from contactqp.methods.penalty import penalty_value
+from contactqp.model import Model
+from contactqp.result import Solution
+
+PENALTY_PER_STIFFNESS = 100.0  # default ε: this many times the largest diagonal of K
+DEFAULT_TOLERANCE = 1e-10  # stop when an update changes λ by less than this, relative
+DEFAULT_MAX_ITERATIONS = 100
+
+
+def default_penalty(model: Model) -> float:
+    """ε = 100 × the largest diagonal of K (N/m): stiff against the bar, far from round-off."""
+    return PENALTY_PER_STIFFNESS * float(model.K.diagonal().max(initial=1.0))
+
+
+def solve_augmented(model: Model, contact: str, *, penalty: float | None = None,
+                    tolerance: float = DEFAULT_TOLERANCE,
+                    max_iterations: int = DEFAULT_MAX_ITERATIONS) -> Solution:
+    """Augmented Lagrangian with penalty ε (N/m; default 100 × max diag K), multiplier updates
+    until one changes λ by at most ``tolerance`` × max(‖λ‖, ‖P‖). If that takes more than
+    ``max_iterations`` updates the last iterate is returned with ``claimed_success`` False."""
+    eps = default_penalty(model) if penalty is None else penalty_value(penalty)
+    K, P, C, g = model.K, model.P, model.C, model.g
+    unilateral = contact == "inequality"
+    lam = np.zeros(model.n_walls)
+    inner_solves = 0
+
+    def step(active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        nonlocal inner_solves
+        inner_solves += 1
+        Ca = C[active]
+        rhs = P - Ca.T @ (lam[active] - eps * g[active])
+        u = linalg.solve(K + eps * (Ca.T @ Ca), rhs, spd=True)
+        trial = lam + eps * (C @ u - g)
+        return u, np.maximum(trial, 0.0) if unilateral else trial
+
+    def update(active: np.ndarray, u: np.ndarray, trial: np.ndarray) -> np.ndarray:
+        return trial > 0.0
+
+    for iteration in range(1, max_iterations + 1):
+        if unilateral:
+            u, new_lam, _ = active_set_loop(model.n_walls, step, update, method="augmented",
+                                            start=lam > 0.0)
+        else:
+            u, new_lam = step(np.ones(model.n_walls, dtype=bool))
+        change = float(np.abs(new_lam - lam).max(initial=0.0))
+        scale = max(float(np.abs(new_lam).max(initial=0.0)), float(np.abs(P).max(initial=0.0)))
+        lam = new_lam
+        if change <= tolerance * scale:
+            return Solution(u, lam, solver="augmented", iterations=iteration,
+                            info={"penalty": eps, "inner_solves": inner_solves})
+    return Solution(u, lam, solver="augmented", iterations=max_iterations,
+                    status=f"not converged in {max_iterations} updates", claimed_success=False,
+                    info={"penalty": eps, "inner_solves": inner_solves})

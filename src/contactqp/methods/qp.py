@@ -1,0 +1,423 @@
+"""Contact as a quadratic programme, solved by any installed QP solver.
+
+The QP of a scene, in the scaled unknowns x = D / U (U a displacement scale, m):
+
+    minimise    ½ xᵀ K̂ x + q̂ᵀ x          K̂ = K / k,  q̂ = −P / F,  k = F / U (N/m)
+    subject to  C x <= ĝ   (inequality)   ĝ = g / U
+                C x  = ĝ   (equality)
+
+It is Π = ½ DᵀKD − DᵀP divided by F·U, so the multiplier μ of each row is the contact force in
+units of F: λ = F·μ. The convention is the model's: L = Π + λᵀ(C D − g), λ >= 0 the force with
+which a wall pushes the bar. With ``scale=False``, U = 1 m and F = 1 N (the QP in SI units).
+
+Scaling (:func:`scales`): k is the stiffness the loaded and walled nodes see together,
+1 / ‖K⁻¹e‖∞ with e = 1 at those nodes (one banded solve); U = max(largest gap, largest load / k),
+the larger of the displacements the gaps and the loads set; F = k·U. Then q̂, ĝ and the expected
+multipliers are O(1), and k depends only on where loads and walls are, so a new load or gap
+changes q̂ and ĝ alone (the cvxpy backend re-solves without re-canonicalising).
+
+Backends (one module each, one contract, a registry filled by try-import):
+
+    ==========  =================================  ========================================
+    backend     solvers                            duals used
+    ==========  =================================  ========================================
+    clarabel    clarabel (its own Python API)      z of A x + s = b, s in the cone
+    osqp        osqp (its own Python API, 1.x)     y of l <= A x <= u
+    cvxpy       every installed cvxpy solver that  ``constraint.dual_value`` of ``C @ x <= g``
+                takes a QP (CLARABEL, OSQP, ...)   or ``C @ x == g``
+    qpsolvers   every name in                      z of G x <= h, y of A x = b
+                ``qpsolvers.available_solvers``
+    ==========  =================================  ========================================
+
+:data:`DUAL_SIGNS` holds, in this one place, the sign that turns each backend's dual into μ
+(every one of them writes the stationarity condition K̂x + q̂ + Cᵀμ = 0, so all are +1; the
+tests check each). :data:`ACCURACY` maps ``accuracy="default" | "high"`` to each solver's own
+settings (table in its docstring).
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+from dataclasses import dataclass
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from contactqp import linalg
+from contactqp.errors import ContactqpError, OptionError, SolverNotAvailable
+from contactqp.methods._qp_outcome import QPOutcome, failed_outcome
+from contactqp.model import Model, build_model
+from contactqp.result import Solution
+from contactqp.scene import Scene
+
+CONTACT_KINDS = ("inequality", "equality")
+ACCURACIES = ("default", "high")
+PIP_SOLVERS = 'pip install "contactqp[solvers]"'
+
+# ---------------------------------------------------------------------------------------------
+# The QP data
+
+
+@dataclass(frozen=True, eq=False)
+class QPProblem:
+    """The QP of a scene in scaled units: minimise ½ xᵀKx + qᵀx subject to C x <= g
+    (``contact="inequality"``) or C x = g (``"equality"``).
+
+    Attributes
+    ----------
+    K : scaled stiffness K_SI / stiffness_scale (dimensionless), sparse symmetric, CSC.
+    q : scaled linear term −P_SI / force_scale (dimensionless).
+    C : constraint rows, one per wall (dimensionless, ±1), CSC.
+    g : scaled right-hand sides gap / displacement_scale (dimensionless).
+    contact : "inequality" or "equality".
+    displacement_scale : U (m): the displacements are D = U·x.
+    force_scale : F (N): the contact forces are λ = F·μ, μ the multipliers of the scaled QP
+        with the convention L = ½ xᵀKx + qᵀx + μᵀ(C x − g).
+    """
+
+    K: sp.csc_array
+    q: np.ndarray
+    C: sp.csc_array
+    g: np.ndarray
+    contact: str
+    displacement_scale: float = 1.0
+    force_scale: float = 1.0
+
+    @property
+    def stiffness_scale(self) -> float:
+        """k = F / U (N/m): K_SI = k·K."""
+        return self.force_scale / self.displacement_scale
+
+    @property
+    def n(self) -> int:
+        """Number of unknowns (free nodes)."""
+        return int(self.q.size)
+
+    def to_si(self, x: np.ndarray, multipliers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(free-node displacements in m, contact forces in N) from the scaled solution x and
+        the multipliers μ of the rows (convention above: μ >= 0 when a wall pushes)."""
+        x = np.asarray(x, dtype=float).reshape(-1)
+        mu = np.asarray(multipliers, dtype=float).reshape(-1)
+        return self.displacement_scale * x, self.force_scale * mu
+
+    def from_si(self, u_free: np.ndarray, contact_force: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The inverse of :meth:`to_si`: (x, μ) from displacements (m) and forces (N)."""
+        u = np.asarray(u_free, dtype=float).reshape(-1)
+        lam = np.asarray(contact_force, dtype=float).reshape(-1)
+        return u / self.displacement_scale, lam / self.force_scale
+
+
+def scales(model: Model) -> tuple[float, float]:
+    """(U in m, F in N): the displacement and force scales of a model (module docstring).
+
+    k = 1 / ‖K⁻¹e‖∞, e = 1 at every loaded or walled free node: the stiffness of the bar as the
+    loads and walls see it; it depends on the scene's structure only. Without loads or walls it
+    falls back to the largest diagonal of K; U falls back to 1 m when there is neither a load nor
+    a gap (the answer is then u = 0 at any scale).
+    """
+    loaded = np.flatnonzero(model.P)
+    walled = model.C.indices
+    e = np.zeros(model.n_free)
+    e[np.concatenate((loaded, walled)).astype(int)] = 1.0
+    if e.any():
+        k = 1.0 / float(np.abs(linalg.solve(model.K, e, spd=True)).max())
+    else:
+        k = float(model.K.diagonal().max())
+    largest_gap = float(np.abs(model.g).max(initial=0.0))
+    U = max(largest_gap, float(np.abs(model.P).max(initial=0.0)) / k)
+    if not U > 0.0:
+        U = 1.0
+    return U, k * U
+
+
+def _scale_option(scale: Any) -> bool:
+    if not isinstance(scale, (bool, np.bool_)):
+        raise OptionError(f"scale must be True or False, got {scale!r}")
+    return bool(scale)
+
+
+def qp_from_model(model: Model, contact: str = "inequality", scale: bool = True) -> QPProblem:
+    """The QP data of a model (see :class:`QPProblem`), scaled by :func:`scales` or in SI."""
+    if contact not in CONTACT_KINDS:
+        raise OptionError(f"contact must be one of {', '.join(CONTACT_KINDS)}; got {contact!r}")
+    U, F = scales(model) if _scale_option(scale) else (1.0, 1.0)
+    return QPProblem(
+        K=sp.csc_array(model.K / (F / U)), q=-model.P / F, C=sp.csc_array(model.C),
+        g=model.g / U, contact=contact, displacement_scale=U, force_scale=F,
+    )
+
+
+def qp_problem(scene: Scene, contact: str = "inequality", scale: bool = True) -> QPProblem:
+    """The QP of a scene, ready for any solver: minimise ½ xᵀKx + qᵀx s.t. C x <= g (or = g).
+
+    With ``scale=True`` (the default, as for ``solve(method="qp")``) the data are
+    non-dimensional; :meth:`QPProblem.to_si` maps a solution and its multipliers back to metres
+    and newtons. With ``scale=False`` they are in SI units (K in N/m, q in N, g in m).
+    """
+    return qp_from_model(build_model(scene), contact, scale)
+
+
+# ---------------------------------------------------------------------------------------------
+# Dual signs and accuracy: each in one place
+
+# μ = DUAL_SIGNS[backend][contact] * (the backend's dual), μ the multiplier of L = Π̂ + μᵀ(Cx − g).
+# clarabel: P x + q + Aᵀz = 0 with A x + s = b, s in the cone (z >= 0 on the nonnegative cone).
+# osqp: P x + q + Aᵀy = 0, y > 0 where the upper bound u is active.
+# cvxpy: f + yᵀ(C x − g) for ``C @ x <= g`` (y >= 0) and for ``C @ x == g``; written
+#   ``g == C @ x`` it would flip, so the backend always writes the expression on the left.
+# qpsolvers: P x + q + Gᵀz + Aᵀy = 0, z >= 0 for G x <= h, y for A x = b.
+DUAL_SIGNS: dict[str, dict[str, float]] = {
+    "clarabel": {"inequality": 1.0, "equality": 1.0},
+    "osqp": {"inequality": 1.0, "equality": 1.0},
+    "cvxpy": {"inequality": 1.0, "equality": 1.0},
+    "qpsolvers": {"inequality": 1.0, "equality": 1.0},
+}
+
+ACCURACY: dict[str, dict[str, dict[str, Any]]] = {
+    "clarabel": {
+        "default": {"tol_gap_abs": 1e-8, "tol_gap_rel": 1e-8, "tol_feas": 1e-8, "tol_ktratio": 1e-6},
+        "high": {"tol_gap_abs": 1e-12, "tol_gap_rel": 1e-12, "tol_feas": 1e-12,
+                 "tol_ktratio": 1e-10},
+    },
+    "osqp": {
+        "default": {"eps_abs": 1e-3, "eps_rel": 1e-3, "max_iter": 4000, "polishing": True},
+        "high": {"eps_abs": 1e-9, "eps_rel": 1e-9, "max_iter": 100_000, "polishing": True,
+                 "polish_refine_iter": 10},
+    },
+    "scs": {
+        "default": {"eps_abs": 1e-4, "eps_rel": 1e-4, "max_iters": 100_000},
+        "high": {"eps_abs": 1e-9, "eps_rel": 1e-9, "max_iters": 100_000},
+    },
+    "ecos": {
+        "default": {"abstol": 1e-8, "reltol": 1e-8, "feastol": 1e-8},
+        "high": {"abstol": 1e-10, "reltol": 1e-10, "feastol": 1e-10},
+    },
+    "cvxopt": {
+        "default": {"abstol": 1e-7, "reltol": 1e-6, "feastol": 1e-7},
+        "high": {"abstol": 1e-10, "reltol": 1e-10, "feastol": 1e-10},
+    },
+    "piqp": {
+        "default": {"eps_abs": 1e-8, "eps_rel": 1e-9},
+        "high": {"eps_abs": 1e-10, "eps_rel": 1e-11},
+    },
+    "proxqp": {
+        "default": {"eps_abs": 1e-5, "eps_rel": 0.0},
+        "high": {"eps_abs": 1e-10, "eps_rel": 0.0},
+    },
+    "qpalm": {
+        "default": {"eps_abs": 1e-4, "eps_rel": 1e-4},
+        "high": {"eps_abs": 1e-10, "eps_rel": 1e-10},
+    },
+    "daqp": {
+        "default": {"primal_tol": 1e-6, "dual_tol": 1e-12},
+        "high": {"primal_tol": 1e-10, "dual_tol": 1e-12},
+    },
+    "highs": {
+        "default": {"primal_feasibility_tolerance": 1e-7, "dual_feasibility_tolerance": 1e-7},
+        "high": {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10},
+    },
+    "quadprog": {"default": {}, "high": {}},
+}
+ACCURACY_DOC = """
+``accuracy`` → each solver's own settings (the scaled QP is O(1), so absolute and relative
+tolerances are alike). "default" is the solver's own default, written out so that every backend
+passes the same values (cvxpy would otherwise substitute its own for some, e.g. OSQP 1e-5);
+the one change is OSQP's polishing, on in both (cheap, and passed explicitly because cvxpy
+turns it off on a re-solve). "high" is near what each solver reaches in double precision.
+
+    =========  ===========================================  =====================  =============
+    solver     settings                                     "default"              "high"
+    =========  ===========================================  =====================  =============
+    clarabel   tol_gap_abs, tol_gap_rel, tol_feas           1e-8                   1e-12
+               tol_ktratio                                  1e-6                   1e-10
+    osqp       eps_abs, eps_rel                             1e-3                   1e-9
+               max_iter; polishing                          4000; on               1e5; on
+    scs        eps_abs, eps_rel; max_iters                  1e-4; 1e5              1e-9; 1e5
+    ecos       abstol, reltol, feastol                      1e-8                   1e-10
+    cvxopt     abstol, reltol, feastol                      1e-7, 1e-6, 1e-7       1e-10
+    piqp       eps_abs, eps_rel                             1e-8, 1e-9             1e-10, 1e-11
+    proxqp     eps_abs (eps_rel 0)                          1e-5                   1e-10
+    qpalm      eps_abs, eps_rel                             1e-4                   1e-10
+    daqp       primal_tol (dual_tol 1e-12)                  1e-6                   1e-10
+    highs      primal/dual_feasibility_tolerance            1e-7                   1e-10
+    quadprog   none (a dual active-set method, exact up to round-off)
+    other      the solver's defaults for both
+    =========  ===========================================  =====================  =============
+"""
+
+
+def accuracy_settings(solver: str, accuracy: str) -> dict[str, Any]:
+    """The settings ``accuracy`` means for ``solver`` (any case); see :data:`ACCURACY_DOC`."""
+    if accuracy not in ACCURACIES:
+        raise OptionError(f"accuracy must be one of {', '.join(ACCURACIES)}; got {accuracy!r}")
+    return dict(ACCURACY.get(solver.lower(), {}).get(accuracy, {}))
+
+
+# ---------------------------------------------------------------------------------------------
+# The backend registry
+
+# backend -> (module, pip install that adds it). Every backend module has the same contract:
+#   NAME, DEFAULT_SOLVER, KNOWN_SOLVERS {solver: pip package}, installed_solvers() -> tuple,
+#   canonical(solver) -> str, solve(qp, solver, settings) -> QPOutcome.
+BACKEND_MODULES: dict[str, tuple[str, str]] = {
+    "clarabel": ("contactqp.methods.qp_clarabel", "pip install clarabel"),
+    "osqp": ("contactqp.methods.qp_osqp", "pip install osqp"),
+    "cvxpy": ("contactqp.methods.qp_cvxpy", "pip install cvxpy"),
+    "qpsolvers": ("contactqp.methods.qp_qpsolvers", 'pip install "qpsolvers[open_source_solvers]"'),
+}
+BACKENDS: dict[str, ModuleType | None] = {}
+MISSING: dict[str, str] = {}  # backend -> why it could not be imported
+for _name, (_module, _pip) in BACKEND_MODULES.items():
+    try:
+        BACKENDS[_name] = importlib.import_module(_module)
+    except ImportError as _error:
+        BACKENDS[_name] = None
+        MISSING[_name] = str(_error)
+
+# Chosen by measurement (benchmarks/qp_overhead.py and the survey in the issue): Clarabel's
+# interior point is accurate to ~1e-12 on every scene tried, claims success only when right,
+# and costs about as much as the explicit Lagrange solve plus a few ms.
+DEFAULT_BACKEND = "clarabel"
+DEFAULT_SCALE = True
+
+# Solvers that turn K into a dense n x n matrix: refused above this many unknowns, where the
+# dense matrix alone would take DENSE_LIMIT² · 8 bytes (200 MB) and the solve O(n³).
+DENSE_LIMIT = 5000
+DENSE_SOLVERS = {("qpsolvers", "daqp"), ("qpsolvers", "quadprog"), ("qpsolvers", "ecos"),
+                 ("cvxpy", "DAQP")}
+
+
+@dataclass(frozen=True)
+class QPSolverInfo:
+    """One backend/solver pair: whether it is installed and usable, and how to add it."""
+
+    backend: str
+    solver: str
+    available: bool
+    install: str
+
+
+def _backend(name: str) -> ModuleType:
+    if name not in BACKEND_MODULES:
+        raise OptionError(f"backend must be one of {', '.join(BACKEND_MODULES)}; got {name!r}")
+    module = BACKENDS.get(name)
+    if module is None:
+        raise SolverNotAvailable(
+            f"QP backend {name!r} is not installed ({MISSING.get(name, 'import failed')}); "
+            f"{BACKEND_MODULES[name][1]} or {PIP_SOLVERS}. Installed backends: "
+            f"{', '.join(b for b, m in BACKENDS.items() if m is not None) or 'none'}"
+        )
+    return module
+
+
+def resolve_solver(backend: str, solver: str | None) -> tuple[ModuleType, str]:
+    """(backend module, solver name in the backend's spelling); OptionError for an unknown
+    name, SolverNotAvailable (with the pip install) for a known one that is not installed."""
+    module = _backend(backend)
+    installed = module.installed_solvers()
+    if solver is None:
+        if module.DEFAULT_SOLVER in installed:
+            return module, module.DEFAULT_SOLVER
+        if not installed:
+            raise SolverNotAvailable(
+                f"QP backend {backend!r} finds no solver it can use; {PIP_SOLVERS}"
+            )
+        return module, installed[0]
+    if not isinstance(solver, str):
+        raise OptionError(f"solver must be a solver name (str) or None, got {solver!r}")
+    name = module.canonical(solver)
+    if name in installed:
+        return module, name
+    if name in module.KNOWN_SOLVERS:
+        raise SolverNotAvailable(
+            f"solver {solver!r} of backend {backend!r} is not installed; "
+            f"pip install {module.KNOWN_SOLVERS[name]} (or {PIP_SOLVERS}). "
+            f"Installed: {', '.join(installed) or 'none'}"
+        )
+    choices = sorted(set(module.KNOWN_SOLVERS) | set(installed))
+    raise OptionError(
+        f"backend {backend!r} has no solver {solver!r}; choices: {', '.join(choices)}"
+    )
+
+
+def available_qp_solvers() -> tuple[QPSolverInfo, ...]:
+    """Every backend/solver pair contactqp knows, installed and usable or not, with the
+    ``pip install`` that adds a missing one. Installed pairs come first."""
+    rows = []
+    for backend, (_, pip) in BACKEND_MODULES.items():
+        module = BACKENDS.get(backend)
+        if module is None:
+            known = _KNOWN_WITHOUT_MODULE.get(backend, (backend,))
+            rows += [QPSolverInfo(backend, s, False, f"{pip} (or {PIP_SOLVERS})") for s in known]
+            continue
+        installed = module.installed_solvers()
+        rows += [QPSolverInfo(backend, s, True, "") for s in installed]
+        rows += [
+            QPSolverInfo(backend, s, False, f"pip install {package} (or {PIP_SOLVERS})")
+            for s, package in module.KNOWN_SOLVERS.items() if s not in installed
+        ]
+    return tuple(sorted(rows, key=lambda r: not r.available))
+
+
+# The solvers a backend would offer, listed even when its own package is missing.
+_KNOWN_WITHOUT_MODULE = {
+    "cvxpy": ("CLARABEL", "OSQP", "SCS", "ECOS", "CVXOPT", "PIQP", "PROXQP", "DAQP", "HIGHS",
+              "QPALM"),
+    "qpsolvers": ("clarabel", "osqp", "scs", "ecos", "cvxopt", "piqp", "proxqp", "daqp",
+                  "highs", "qpalm", "quadprog"),
+}
+
+
+# ---------------------------------------------------------------------------------------------
+# The method
+
+
+def guarded(solve: Any, qp: QPProblem, *args: Any) -> QPOutcome:
+    """Call a backend's solve; anything the solver raises becomes a failed outcome (the Result
+    check then flags it). The library's own errors (user mistakes) pass through."""
+    try:
+        return solve(qp, *args)
+    except (KeyboardInterrupt, SystemExit, ContactqpError):
+        raise
+    except BaseException as error:  # noqa: BLE001 - Rust solvers panic with a BaseException
+        return failed_outcome(qp.n, qp.g.size, f"raised {type(error).__name__}: {error}")
+
+
+def solve_qp(model: Model, contact: str, *, backend: str = DEFAULT_BACKEND,
+             solver: str | None = None, accuracy: str = "default",
+             scale: bool = DEFAULT_SCALE) -> Solution:
+    """Solve the contact problem as a QP with ``backend`` ("clarabel", "osqp", "cvxpy",
+    "qpsolvers") and ``solver`` (a name the backend knows; None: its default), at
+    ``accuracy`` "default" or "high" (:data:`ACCURACY_DOC`), scaled or in SI (``scale``)."""
+    module, name = resolve_solver(backend, solver)
+    settings = accuracy_settings(name, accuracy)
+    start = time.perf_counter()
+    qp = qp_from_model(model, contact, scale)
+    built = time.perf_counter()
+    label = backend if name == backend else f"{backend}/{name}"
+    if (backend, name) in DENSE_SOLVERS and qp.n > DENSE_LIMIT:
+        outcome = failed_outcome(
+            qp.n, qp.g.size,
+            f"not attempted: {name} works on dense matrices and the bar has {qp.n} unknowns "
+            f"(limit {DENSE_LIMIT})",
+        )
+    else:
+        outcome = guarded(module.solve, qp, name, settings)
+    sign = DUAL_SIGNS[backend][contact]
+    u_free, contact_force = qp.to_si(outcome.x, sign * np.asarray(outcome.dual, dtype=float))
+    info = {"backend": backend, "solver": name, "accuracy": accuracy, "scale": bool(scale),
+            "displacement_scale": qp.displacement_scale, "force_scale": qp.force_scale,
+            "time_qp_data": built - start, **outcome.info}
+    return Solution(u_free, contact_force, solver=label, iterations=int(outcome.iterations),
+                    status=outcome.status, claimed_success=bool(outcome.claimed_success),
+                    info=info)
+
+
+__all__ = [
+    "ACCURACY", "ACCURACY_DOC", "BACKENDS", "DEFAULT_BACKEND", "DEFAULT_SCALE", "DUAL_SIGNS",
+    "QPOutcome", "QPProblem", "QPSolverInfo", "available_qp_solvers", "qp_from_model",
+    "qp_problem", "scales", "solve_qp",
+]

@@ -1,0 +1,152 @@
+"""QP backend: cvxpy, with any installed cvxpy solver that takes a QP.
+
+The problem is written once per scene structure as a parametrised (DPP) problem and cached, so
+a new load or gap only sets parameters and re-solves without re-canonicalising:
+
+    minimise ½ quad_form(x, psd_wrap(K)) + p @ x[loaded]   subject to  C @ x <= gaps  (or ==)
+
+Facts (cvxpy 1.9.3) that shape it:
+- K is wrapped in ``cp.psd_wrap``: without it the PSD check densifies K (1e5 elements exhaust
+  memory).
+- The parameters are low-dimensional: p holds q at the loaded unknowns only, ``gaps`` one value
+  per wall. A length-n parameter densifies during canonicalisation (74 GiB at 1e5 elements).
+- Rows are written ``C @ x <= gaps`` / ``C @ x == gaps``, expression on the left: with the
+  parameter on the left the equality's dual changes sign.
+- On a re-solve cvxpy turns OSQP's polishing off unless it is passed, so the accuracy table
+  always passes it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import cvxpy as cp
+import numpy as np
+import scipy.sparse as sp
+from cvxpy.reductions.solvers import defines
+
+from contactqp.methods._qp_outcome import QPOutcome, vector_or_nan
+
+if TYPE_CHECKING:
+    from contactqp.methods.qp import QPProblem
+
+NAME = "cvxpy"
+DEFAULT_SOLVER = "CLARABEL"
+KNOWN_SOLVERS = {
+    "CLARABEL": "clarabel", "OSQP": "osqp", "SCS": "scs", "ECOS": "ecos", "CVXOPT": "cvxopt",
+    "PIQP": "piqp", "PROXQP": "proxsuite", "DAQP": "daqp", "HIGHS": "highspy", "QPALM": "qpalm",
+}
+# Branch-and-bound wrappers of a solver that is listed anyway.
+MIXED_INTEGER_ONLY = {"ECOS_BB", "GLPK_MI"}
+# Settings a solver needs whatever the accuracy: cvxpy runs ProxQP dense unless told otherwise.
+FIXED_SETTINGS = {"PROXQP": {"backend": "sparse"}}
+CACHE_SIZE = 4  # scene structures kept (each holds its canonicalised problem)
+
+
+def takes_qp(name: str) -> bool:
+    """Whether the installed cvxpy solver ``name`` solves a QP: a QP solver, or a conic solver
+    with a quadratic objective or second-order cones (cvxpy rewrites the QP for it)."""
+    if name in MIXED_INTEGER_ONLY:
+        return False
+    if name in defines.SOLVER_MAP_QP:
+        return True
+    conic = defines.SOLVER_MAP_CONIC.get(name)
+    return conic is not None and (
+        conic.supports_quad_obj() or cp.constraints.SOC in conic.SUPPORTED_CONSTRAINTS
+    )
+
+
+def installed_solvers() -> tuple[str, ...]:
+    return tuple(name for name in cp.installed_solvers() if takes_qp(name))
+
+
+def canonical(solver: str) -> str:
+    return solver.upper()
+
+
+@dataclass(frozen=True, eq=False)
+class Structure:
+    """A canonicalisable problem for one scene structure, with its parameters."""
+
+    problem: cp.Problem
+    x: cp.Variable
+    loaded: np.ndarray
+    loads: cp.Parameter | None
+    gaps: cp.Parameter | None
+    rows: cp.Constraint | None
+
+
+_CACHE: OrderedDict[bytes, Structure] = OrderedDict()
+
+
+def _key(qp: QPProblem, loaded: np.ndarray) -> bytes:
+    digest = hashlib.sha256(qp.contact.encode())
+    for array in (np.array(qp.K.shape), qp.K.indptr, qp.K.indices, qp.K.data,
+                  qp.C.indptr, qp.C.indices, qp.C.data, loaded):
+        digest.update(np.ascontiguousarray(array).tobytes())
+        digest.update(b"|")
+    return digest.digest()
+
+
+def build_structure(K: sp.sparray, C: sp.sparray, loaded: np.ndarray, contact: str) -> Structure:
+    """The DPP problem of a structure: parameters for the loads at ``loaded`` and the gaps."""
+    x = cp.Variable(K.shape[0])
+    objective = 0.5 * cp.quad_form(x, cp.psd_wrap(sp.csc_matrix(K)))
+    loads = gaps = rows = None
+    if loaded.size:
+        loads = cp.Parameter(loaded.size)
+        objective = objective + loads @ x[loaded]
+    constraints = []
+    if C.shape[0]:
+        gaps = cp.Parameter(C.shape[0])
+        Cx = sp.csr_matrix(C) @ x
+        rows = Cx <= gaps if contact == "inequality" else Cx == gaps
+        constraints.append(rows)
+    problem = cp.Problem(cp.Minimize(objective), constraints)
+    return Structure(problem, x, loaded, loads, gaps, rows)
+
+
+def structure(qp: QPProblem) -> tuple[Structure, bool]:
+    """(the cached structure of ``qp``, whether it was already cached)."""
+    loaded = np.flatnonzero(qp.q)
+    key = _key(qp, loaded)
+    if key in _CACHE:
+        _CACHE.move_to_end(key)
+        return _CACHE[key], True
+    built = build_structure(qp.K, qp.C, loaded, qp.contact)
+    _CACHE[key] = built
+    while len(_CACHE) > CACHE_SIZE:
+        _CACHE.popitem(last=False)
+    return built, False
+
+
+def clear_cache() -> None:
+    _CACHE.clear()
+
+
+def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
+    """Solve ``qp`` through cvxpy with ``solver``; ``settings`` go to the solver."""
+    start = time.perf_counter()
+    cached, hit = structure(qp)
+    if cached.loads is not None:
+        cached.loads.value = qp.q[cached.loaded]
+    if cached.gaps is not None:
+        cached.gaps.value = qp.g
+    options = {**FIXED_SETTINGS.get(solver, {}), **settings}
+    ready = time.perf_counter()
+    cached.problem.solve(solver=solver, warm_start=False, verbose=False, **options)
+    solved = time.perf_counter()
+    stats = cached.problem.solver_stats
+    status = str(cached.problem.status)
+    dual = cached.rows.dual_value if cached.rows is not None else np.zeros(0)
+    return QPOutcome(
+        vector_or_nan(cached.x.value, qp.n), vector_or_nan(dual, qp.g.size), status,
+        claimed_success=status == cp.OPTIMAL, iterations=int(stats.num_iters or 0),
+        info={"time_setup": (ready - start) + (cached.problem.compilation_time or 0.0),
+              "time_solve": (solved - ready) - (cached.problem.compilation_time or 0.0),
+              "time_solver": stats.solve_time, "cache": "hit" if hit else "miss"},
+    )

@@ -1,0 +1,85 @@
+"""QP backend: qpsolvers, one front end to many solvers (``qpsolvers.available_solvers``).
+
+The rows go in as G x <= h (inequality, dual z >= 0) or A x = b (equality, dual y); qpsolvers'
+KKT condition is P x + q + Gᵀz + Aᵀy = 0. Its Solution says ``found``; that is the claim.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import qpsolvers
+import scipy.sparse as sp
+
+from contactqp.methods._qp_outcome import QPOutcome, vector_or_nan
+
+if TYPE_CHECKING:
+    from contactqp.methods.qp import QPProblem
+
+NAME = "qpsolvers"
+DEFAULT_SOLVER = "clarabel"
+KNOWN_SOLVERS = {
+    "clarabel": "clarabel", "osqp": "osqp", "scs": "scs", "ecos": "ecos", "cvxopt": "cvxopt",
+    "piqp": "piqp", "proxqp": "proxsuite", "daqp": "daqp", "highs": "highspy",
+    "qpalm": "qpalm", "quadprog": "quadprog",
+}
+DENSE_INPUT = {"quadprog"}  # refuses sparse matrices
+# Settings each solver needs whatever the accuracy: ProxQP's sparse backend (never a dense K).
+FIXED_SETTINGS = {"proxqp": {"backend": "sparse"}}
+
+
+def installed_solvers() -> tuple[str, ...]:
+    return tuple(qpsolvers.available_solvers)
+
+
+def canonical(solver: str) -> str:
+    return solver.lower()
+
+
+def _status(found: qpsolvers.Solution) -> str:
+    """'found' or 'not found', with the solver's own status where qpsolvers keeps it."""
+    text = "found" if found.found else "not found"
+    extras = found.extras or {}
+    for raw in (extras.get("status"), extras.get("infostring"),
+                getattr(extras.get("info"), "status", None)):
+        if raw is not None and np.ndim(raw) == 0:
+            return f"{text} ({raw})"
+    return text
+
+
+def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
+    """Solve ``qp`` with qpsolvers' ``solver``; ``settings`` go to that solver as keywords."""
+    start = time.perf_counter()
+    K, C = sp.csc_matrix(qp.K), sp.csc_matrix(qp.C)
+    if solver in DENSE_INPUT:
+        K, C = K.toarray(), C.toarray()
+    if qp.contact == "inequality":
+        problem = qpsolvers.Problem(K, qp.q, G=C, h=qp.g)
+    else:
+        problem = qpsolvers.Problem(K, qp.q, A=C, b=qp.g)
+    setup = time.perf_counter()
+    options = {**FIXED_SETTINGS.get(solver, {}), **settings}
+    found = qpsolvers.solve_problem(problem, solver=solver, verbose=False, **options)
+    solved = time.perf_counter()
+    dual = found.z if qp.contact == "inequality" else found.y
+    iterations = _iterations(found.extras or {})
+    return QPOutcome(
+        vector_or_nan(found.x, qp.n), vector_or_nan(dual, qp.g.size), _status(found),
+        claimed_success=bool(found.found), iterations=iterations,
+        info={"time_setup": setup - start, "time_solve": solved - setup},
+    )
+
+
+def _iterations(extras: dict[str, Any]) -> int:
+    """The iteration count where qpsolvers keeps the solver's own info (0 when it does not)."""
+    for key in ("iter", "iterations", "num_iters", "iter_count"):
+        if np.ndim(extras.get(key)) == 0 and extras.get(key) is not None:
+            return int(extras[key])
+    info = extras.get("info")
+    for key in ("iter", "iterations", "num_iters"):
+        value = getattr(info, key, None) if not isinstance(info, dict) else info.get(key)
+        if value is not None and np.ndim(value) == 0:
+            return int(value)
+    return 0
