@@ -10,11 +10,16 @@ each wall pushes the bar, and the wall's force on the bar in +x is −Cᵀλ.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 
+from contactqp.errors import OptionError, SolverError
 from contactqp.scene import Bar, Scene
+
+CONDENSE_LIMIT = 2000  # contact nodes: the condensed flexibility is a dense square of this size
 
 
 @dataclass(frozen=True, eq=False)
@@ -25,18 +30,32 @@ class Model:
     ----------
     scene : the scene it was built from.
     free : node number of each unknown (the free nodes, in order).
-    K : sparse stiffness of the free nodes (N/m), tridiagonal, CSR.
     P : loads on the free nodes (N).
     C : sparse constraint rows, one per wall (dimensionless, ±1 at the wall's node), CSR.
     g : the walls' gaps (m).
+    stiffness : K, the stiffness of the free nodes (N/m): for a chain its LAPACK symmetric
+        lower band storage (2 x n_free: diagonal, sub-diagonal), else a sparse matrix.
+    K : K as a sparse CSR matrix (made from the band when first asked for).
     """
 
     scene: Scene
     free: np.ndarray
-    K: sp.csr_array
+    stiffness: np.ndarray | sp.sparray
     P: np.ndarray
     C: sp.csr_array
     g: np.ndarray
+
+    @property
+    def K_band(self) -> np.ndarray | None:
+        """K in band storage, or None when K is not a chain (a condensed model)."""
+        return self.stiffness if isinstance(self.stiffness, np.ndarray) else None
+
+    @cached_property
+    def K(self) -> sp.csr_array:
+        band = self.K_band
+        if band is None:
+            return sp.csr_array(self.stiffness)
+        return sp.csr_array(sp.diags_array([band[1, :-1], band[0], band[1, :-1]], offsets=[-1, 0, 1]))
 
     @property
     def n_free(self) -> int:
@@ -97,15 +116,73 @@ def penetration(scene: Scene, u: np.ndarray) -> np.ndarray:
 
 
 def build_model(scene: Scene) -> Model:
-    """The model of a scene, O(n) in time and memory."""
+    """The model of a scene, O(n) in time and memory: K comes straight from the element
+    stiffnesses in band form (a chain with its supports taken out)."""
     n = scene.n_nodes
     is_free = np.ones(n, dtype=bool)
     is_free[[s.node for s in scene.supports]] = False
     free = np.flatnonzero(is_free)
     column = np.full(n, -1)
     column[free] = np.arange(free.size)
-    K = sp.csr_array(stiffness_matrix(scene.bar)[free][:, free])
+    k = scene.bar.stiffness
+    diagonal = (np.concatenate((k, [0.0])) + np.concatenate(([0.0], k)))[free]
+    # free nodes j, j+1 share an element only when they are neighbours on the bar
+    coupled = np.diff(free) == 1
+    sub = np.zeros(free.size)
+    sub[:-1] = np.where(coupled, -k[free[:-1]], 0.0)
     nodes, signs = wall_rows(scene)
     C = sp.csr_array((signs, (np.arange(nodes.size), column[nodes])), shape=(nodes.size, free.size))
     g = np.array([w.gap for w in scene.walls], dtype=float)
-    return Model(scene, free, K, scene.nodal_loads()[free], C, g)
+    return Model(scene, free, np.vstack((diagonal, sub)), scene.nodal_loads()[free], C, g)
+
+
+@dataclass(frozen=True, eq=False)
+class Condensed:
+    """A model condensed onto its contact nodes, and how to get every displacement back.
+
+    ``model`` has one unknown per node that carries a wall: its stiffness is S⁻¹, S = B K⁻¹ Bᵀ
+    the flexibility between those nodes (B selects them), its load S⁻¹ w₀ with w₀ = B K⁻¹ P
+    their free displacements, and the same wall rows and gaps. Any method solves it; then
+    u = K⁻¹P − K⁻¹Cᵀλ, from the same factorisation (``u0`` and ``X`` = K⁻¹Bᵀ).
+    """
+
+    model: Model
+    u0: np.ndarray
+    X: np.ndarray
+
+    def displacements(self, contact_force: np.ndarray) -> np.ndarray:
+        """Free-node displacements of the full model (m) under contact forces λ (N)."""
+        return self.u0 - self.X @ (self.model.C.T @ np.asarray(contact_force, dtype=float))
+
+
+def condense(model: Model) -> Condensed:
+    """Condense a chain model onto its contact nodes with one banded Cholesky factorisation
+    of K (LAPACK pbsv) and one solve per contact node plus one for the loads."""
+    if model.K_band is None:
+        raise OptionError("formulation='condensed' needs a chain model (one built by build_model)")
+    nodes = np.unique(model.C.indices)
+    if nodes.size > CONDENSE_LIMIT:
+        raise OptionError(
+            f"formulation='condensed': {nodes.size} contact nodes give a dense "
+            f"{nodes.size}x{nodes.size} flexibility (limit {CONDENSE_LIMIT}); use 'full'"
+        )
+    rhs = np.zeros((model.n_free, nodes.size + 1))
+    rhs[:, 0] = model.P
+    rhs[nodes, np.arange(1, nodes.size + 1)] = 1.0
+    try:
+        solved = sla.solveh_banded(model.K_band, rhs, lower=True, check_finite=False)
+        flexibility = solved[nodes, 1:]
+        stiffness = sla.inv(flexibility, check_finite=False) if nodes.size else flexibility
+    except np.linalg.LinAlgError as error:
+        raise SolverError(f"condensed formulation: K is not positive definite ({error})") from None
+    stiffness = 0.5 * (stiffness + stiffness.T)
+    u0, X = solved[:, 0], solved[:, 1:]
+    column = np.full(model.n_free, -1)
+    column[nodes] = np.arange(nodes.size)
+    C = model.C.tocoo()
+    reduced = Model(
+        model.scene, model.free[nodes], sp.csr_array(stiffness), stiffness @ u0[nodes],
+        sp.csr_array((C.data, (C.row, column[C.col])), shape=(model.n_walls, nodes.size)),
+        model.g,
+    )
+    return Condensed(reduced, u0, X)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import tomllib
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Any, Literal
 
@@ -162,12 +163,12 @@ class Bar:
     def n_nodes(self) -> int:
         return self.n_elements + 1
 
-    @property
+    @cached_property
     def stiffness(self) -> np.ndarray:
         """Axial stiffness E·A/L of each element (N/m)."""
         return self.youngs_modulus * self.areas / self.lengths
 
-    @property
+    @cached_property
     def node_x(self) -> np.ndarray:
         """Undeformed x of every node (m), node 0 at x = 0."""
         return np.concatenate(([0.0], np.cumsum(self.lengths)))

@@ -9,6 +9,7 @@ from __future__ import annotations
 import inspect
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from contactqp.errors import OptionError
@@ -16,11 +17,12 @@ from contactqp.methods.augmented import solve_augmented
 from contactqp.methods.lagrange import solve_lagrange
 from contactqp.methods.penalty import solve_penalty
 from contactqp.methods.qp import solve_qp
-from contactqp.model import build_model
+from contactqp.model import build_model, condense
 from contactqp.result import Result, Solution, make_result
 from contactqp.scene import Scene, seed_scene
 
 CONTACT_KINDS = ("inequality", "equality")
+FORMULATIONS = ("full", "condensed")
 
 METHODS: dict[str, Callable[..., Solution]] = {
     "lagrange": solve_lagrange,
@@ -64,23 +66,37 @@ def check_equality_is_possible(scene: Scene) -> None:
 
 
 def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "inequality",
-          **options: Any) -> Result:
+          formulation: str = "full", **options: Any) -> Result:
     """Solve a scene (the default scene when None) by ``method`` with ``contact``
     "inequality" (unilateral, the default) or "equality" (the textbook form).
 
     Methods and their options: "lagrange" (max_iterations), "penalty" (penalty ε in N/m,
-    default 1e14; max_iterations), "qp" (backend "clarabel" (default), "osqp", "cvxpy" or
-    "qpsolvers"; solver, None for the backend's default; accuracy "default" or "high"; scale,
-    default True: see :mod:`contactqp.methods.qp`). Returns a checked :class:`Result`.
+    default 1e14; max_iterations), "augmented" (penalty, default 100 x max diag K; tolerance;
+    max_iterations), "qp" (backend "clarabel" (default), "osqp", "cvxpy" or "qpsolvers";
+    solver, None for the backend's default; accuracy "default" or "high"; scale, default True:
+    see :mod:`contactqp.methods.qp`).
+
+    ``formulation``: "full" (every free node an unknown) or "condensed" (K factored once, the
+    method sees only the nodes that carry walls, every displacement recovered from the same
+    factorisation; see :func:`contactqp.model.condense`). Returns a checked :class:`Result`.
     """
     scene = seed_scene() if scene is None else scene
     function = _validate(method, contact, options)
+    if formulation not in FORMULATIONS:
+        raise OptionError(f"formulation must be one of {', '.join(FORMULATIONS)}; "
+                          f"got {formulation!r}")
     if contact == "equality":
         check_equality_is_possible(scene)
     start = time.perf_counter()
     model = build_model(scene)
     built = time.perf_counter()
-    solution = function(model, contact, **options)
+    if formulation == "condensed":
+        condensed = condense(model)
+        solution = function(condensed.model, contact, **options)
+        solution = replace(solution, u_free=condensed.displacements(solution.contact_force))
+    else:
+        solution = function(model, contact, **options)
     solved = time.perf_counter()
+    options = {**options, "formulation": formulation} if formulation != "full" else options
     return make_result(model, solution, method=method, contact=contact, options=options,
                        timings={"build": built - start, "solve": solved - built})
