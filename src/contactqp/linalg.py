@@ -34,6 +34,17 @@ def _band_storage(matrix: sp.coo_array, lower: int, upper: int) -> np.ndarray:
     return ab
 
 
+def solve_spd_band(band: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """Solve with an SPD matrix in LAPACK symmetric lower band storage (one Cholesky
+    factorisation for every column of ``rhs``). Raises numpy's LinAlgError when the matrix
+    is not positive definite."""
+    if band.shape[1] == 1:  # scipy's tridiagonal path (ptsv) rejects a 1 x 1 system
+        if not band[0, 0] > 0.0:
+            raise np.linalg.LinAlgError("1 x 1 matrix is not positive")
+        return np.asarray(rhs, dtype=float) / band[0, 0]
+    return sla.solveh_banded(band, rhs, lower=True, check_finite=False)
+
+
 def solve(matrix: sp.sparray, rhs: np.ndarray, *, spd: bool = False,
           order: np.ndarray | None = None) -> np.ndarray:
     """Solve ``matrix @ x = rhs`` (rhs may have several columns).
@@ -54,8 +65,7 @@ def solve(matrix: sp.sparray, rhs: np.ndarray, *, spd: bool = False,
     lower, upper = _bandwidths(coo)
     try:
         if max(lower, upper) <= MAX_BANDWIDTH and spd:
-            x = sla.solveh_banded(_band_storage(sp.coo_array(sp.tril(coo)), lower, 0), rhs, lower=True,
-                                  check_finite=False)
+            x = solve_spd_band(_band_storage(sp.coo_array(sp.tril(coo)), lower, 0), rhs)
         elif max(lower, upper) <= MAX_BANDWIDTH:
             x = sla.solve_banded((lower, upper), _band_storage(coo, lower, upper), rhs,
                                  check_finite=False)

@@ -16,6 +16,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from contactqp import linalg
 from contactqp.errors import OptionError, SolverError
 from contactqp.scene import Bar, Scene
 
@@ -170,7 +171,7 @@ def condense(model: Model) -> Condensed:
     rhs[:, 0] = model.P
     rhs[nodes, np.arange(1, nodes.size + 1)] = 1.0
     try:
-        solved = sla.solveh_banded(model.K_band, rhs, lower=True, check_finite=False)
+        solved = linalg.solve_spd_band(model.K_band, rhs)
         flexibility = solved[nodes, 1:]
         stiffness = sla.inv(flexibility, check_finite=False) if nodes.size else flexibility
     except np.linalg.LinAlgError as error:

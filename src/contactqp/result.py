@@ -9,7 +9,9 @@ Residuals (all dimensionless, ∞-norms):
     equilibrium      ‖K u − P − R − W‖ / F, W the walls' forces on the bar, R the reactions,
                      F the largest nodal force term (loads, internal forces, reactions, walls)
     feasibility      inequality: max(0, max penetration) / U; equality: max |penetration| / U,
-                     U the displacement scale max(‖u‖, largest gap)
+                     U the displacement scale max(‖u‖, largest gap, F / k_max): the last
+                     term, F over the stiffest element, keeps U physical when the exact
+                     answer is u = 0 (a closed zero gap) and ‖u‖ is round-off
     complementarity  max |λᵢ · penetrationᵢ| / (F · U)          (inequality contact)
     sign             max(0, −min λ) / F: how hard a wall pulls   (inequality contact)
 """
@@ -82,7 +84,7 @@ def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.
     support_forces[[s.node for s in scene.supports]] = reactions
     force_scale = max(_norm(loads), _norm(internal), _norm(walls), _norm(support_forces), _TINY)
     gaps = np.array([w.gap for w in scene.walls], dtype=float)
-    disp_scale = max(_norm(u), _norm(gaps), _TINY)
+    disp_scale = max(_norm(u), _norm(gaps), force_scale / float(scene.bar.stiffness.max()), _TINY)
     pen = penetration(scene, u)
     lam = np.asarray(contact_force, dtype=float)
     equilibrium = _norm(internal - loads - support_forces - walls) / force_scale
@@ -93,7 +95,7 @@ def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.
                      "complementarity": None, "sign": None}
     else:
         feasibility = max(0.0, float(pen.max(initial=0.0))) / disp_scale
-        complementarity = _norm(lam * pen) / (force_scale * disp_scale)
+        complementarity = _norm(lam * pen) / force_scale / disp_scale  # no underflow to 0
         residuals = {"equilibrium": equilibrium, "feasibility": feasibility,
                      "complementarity": complementarity, "sign": pulling}
     failures = [
