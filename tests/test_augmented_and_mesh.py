@@ -8,6 +8,7 @@ flexibility of [a, b] is ∫ dx/(E π d(x)²/4), integrated here by quadrature.
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -95,7 +96,7 @@ def test_exact_area_rule_matches_the_cone_closed_form(elements):
 def test_midpoint_rule_converges_as_h_squared():
     errors = [abs(contactqp.solve(contactqp.seed_scene(n)).contact_force[0] - continuum_force())
               for n in (4, 8, 16, 32)]
-    rates = [math.log2(a / b) for a, b in zip(errors, errors[1:])]
+    rates = [math.log2(a / b) for a, b in itertools.pairwise(errors)]
     # the midpoint rule's flexibility error is O(h²); the first halving is still pre-asymptotic
     assert rates == pytest.approx([2.0, 2.0, 2.0], abs=0.1)
 

@@ -11,7 +11,13 @@ from contactqp.methods import CONTACT_KINDS, solve
 from contactqp.methods.penalty import DEFAULT_PENALTY
 from contactqp.result import Result
 from contactqp.scene import (
-    SEED_DIAMETERS, SEED_GAP, SEED_LENGTH, SEED_LOAD, SEED_MODULUS, Scene, seed_scene,
+    SEED_DIAMETERS,
+    SEED_GAP,
+    SEED_LENGTH,
+    SEED_LOAD,
+    SEED_MODULUS,
+    Scene,
+    seed_scene,
 )
 
 SWEEP_PENALTIES = (1.0,) + tuple(10.0 ** k for k in range(5, 21))  # N/m: 1, 1e5, 1e6 … 1e20
