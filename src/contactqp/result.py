@@ -6,8 +6,12 @@ the scene: equilibrium at every node, feasibility at every wall, complementarity
 every contact force. No solver's own status is trusted; it is recorded beside the check.
 
 Residuals (all dimensionless, ∞-norms):
-    equilibrium      ‖K u − P − R − W‖ / F, W the walls' forces on the bar, R the reactions,
-                     F the largest nodal force term (loads, internal forces, reactions, walls)
+    equilibrium      section equilibrium: at every cut through the bar, the element force from u
+                     against the force that the loads, walls (W) and supports (R) on one side
+                     need: ‖cumsum(K u − P − R − W)‖ / F, F the largest nodal force term. The
+                     last cut is the balance of the whole bar. A per-node residual is not
+                     enough: n residuals within tolerance add up along a long bar (OSQP on a
+                     10⁴-element bar: 8e-7 per node, 0.56 % in the contact force)
     feasibility      inequality: max(0, max penetration) / U; equality: max |penetration| / U,
                      U the displacement scale max(‖u‖, largest gap, F / k_max): the last
                      term, F over the stiffest element, keeps U physical when the exact
@@ -87,7 +91,7 @@ def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.
     disp_scale = max(_norm(u), _norm(gaps), force_scale / float(scene.bar.stiffness.max()), _TINY)
     pen = penetration(scene, u)
     lam = np.asarray(contact_force, dtype=float)
-    equilibrium = _norm(internal - loads - support_forces - walls) / force_scale
+    equilibrium = _norm(np.cumsum(internal - loads - support_forces - walls)) / force_scale
     pulling = max(0.0, -float(lam.min(initial=0.0))) / force_scale
     if contact == "equality":
         feasibility = _norm(pen) / disp_scale
