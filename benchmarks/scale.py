@@ -1,8 +1,10 @@
-"""How the explicit methods scale: a tapered bar of 10² … 10⁶ elements, one wall at the tip.
+"""How the methods scale: the default scene's tapered bar with 10² … 10⁶ elements (exact areas),
+one wall at the tip, full and condensed formulations.
 
 Times are medians over repeats, in seconds and as ratios to a floor measured in the same run:
 one banded Cholesky factor-and-solve of K (LAPACK pbsv through scipy.linalg.solveh_banded).
-``solve`` times include building the scene's model and the independent check.
+``solve`` times are end to end on a loaded scene: model, method, Result and its check. The
+force error is against the continuum closed form (exact areas make the two the same).
 
     python benchmarks/scale.py [--quick] [--out DIR]
 """
@@ -14,6 +16,7 @@ import json
 import platform
 import statistics
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +24,15 @@ import scipy.linalg as sla
 
 import contactqp
 from contactqp.model import build_model
+from contactqp.studies import cone_contact_force
+
+RUNS = [  # (method, options, formulation, largest size it is run at in full formulation)
+    ("lagrange", {}, 10**6),
+    ("penalty", {}, 10**6),
+    ("augmented", {}, 10**6),
+    ("qp", {"backend": "clarabel"}, 10**4),
+    ("qp", {"backend": "osqp"}, 10**4),
+]
 
 
 def tapered_scene(elements: int) -> contactqp.Scene:
@@ -57,21 +69,31 @@ def main() -> None:
     sizes = [10**2, 10**4, 10**5] if args.quick else [10**2, 10**4, 10**5, 10**6]
     repeats = 3 if args.quick else 7
     rows = []
-    print(f"{'elements':>9} {'method':>9} {'contact':>10} {'time (s)':>10} {'/floor':>8} {'verified':>8}")
+    exact = cone_contact_force()
+    print(f"{'elements':>9} {'run':>22} {'formulation':>11} {'time (s)':>9} {'/floor':>7} "
+          f"{'force error':>11} {'verified':>8}")
     for n in sizes:
         scene = tapered_scene(n)
         base = floor(scene, repeats)
-        print(f"{n:>9} {'floor':>9} {'':>10} {base:10.4f} {1.0:8.1f}")
-        for method in ("lagrange", "penalty"):
-            for contact in contactqp.CONTACT_KINDS:
-                result = contactqp.solve(scene, method, contact)
-                seconds = median_time(lambda: contactqp.solve(scene, method, contact), repeats)
-                rows.append({"elements": n, "method": method, "contact": contact,
+        print(f"{n:>9} {'floor: pbsv on K':>22} {'':>11} {base:9.4f} {1.0:7.2f}")
+        for method, options, full_limit in RUNS:
+            for formulation in ("full", "condensed"):
+                label = "/".join([method, *options.values()])
+                if formulation == "full" and n > full_limit:
+                    rows.append({"elements": n, "run": label, "formulation": formulation,
+                                 "skipped": f"full formulation above {full_limit} elements: "
+                                            "an interior-point/ADMM solve of n unknowns"})
+                    continue
+                result = contactqp.solve(scene, method, formulation=formulation, **options)
+                seconds = median_time(
+                    partial(contactqp.solve, scene, method, formulation=formulation, **options),
+                    repeats)
+                error = abs(float(result.contact_force[0]) - exact) / exact
+                rows.append({"elements": n, "run": label, "formulation": formulation,
                              "seconds": seconds, "floor_seconds": base, "ratio": seconds / base,
-                             "verified": result.verified,
-                             "contact_force": float(result.contact_force[0])})
-                print(f"{n:>9} {method:>9} {contact:>10} {seconds:10.4f} {seconds / base:8.1f} "
-                      f"{str(result.verified):>8}")
+                             "force_error": error, "verified": result.verified})
+                print(f"{n:>9} {label:>22} {formulation:>11} {seconds:9.4f} {seconds / base:7.2f} "
+                      f"{error:11.1e} {result.verified!s:>8}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     meta = {"machine": platform.machine(), "processor": platform.processor(),

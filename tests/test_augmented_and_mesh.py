@@ -54,8 +54,17 @@ def test_augmented_default_penalty_converges_in_a_few_updates_to_round_off():
     result = contactqp.solve(method="augmented")
     assert result.contact_force[0] == pytest.approx(exact, rel=1e-12)  # round-off level
     assert result.iterations <= 10
+    # the walls of the default scene see 1/f, f = Σ L/(EA) from the support to the tip
     model = build_model(contactqp.seed_scene())
-    assert default_penalty(model) == pytest.approx(100 * model.K.diagonal().max())
+    assert default_penalty(model) == pytest.approx(100 / cone_like_f(), rel=1e-12)
+
+
+def test_augmented_default_penalty_does_not_grow_with_the_mesh():
+    coarse, fine = (default_penalty(build_model(contactqp.seed_scene(n, "exact"))) for n in (2, 2000))
+    # exact areas: the same flexibility at the tip on every mesh, so the same ε
+    assert fine == pytest.approx(coarse, rel=1e-9)
+    result = contactqp.solve(contactqp.seed_scene(20000, "exact"), method="augmented")
+    assert result.verified and result.iterations <= 10
 
 
 def test_augmented_with_a_hopeless_penalty_says_it_did_not_converge():
