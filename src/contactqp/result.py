@@ -92,7 +92,7 @@ def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.
     pen = penetration(scene, u)
     lam = np.asarray(contact_force, dtype=float)
     equilibrium = _norm(np.cumsum(internal - loads - support_forces - walls)) / force_scale
-    pulling = max(0.0, -float(lam.min(initial=0.0))) / force_scale
+    pulling = float(np.max(-lam, initial=0.0)) / force_scale  # NaN stays NaN: not physical
     if contact == "equality":
         feasibility = _norm(pen) / disp_scale
         residuals = {"equilibrium": equilibrium, "feasibility": feasibility,

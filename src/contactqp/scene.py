@@ -7,6 +7,7 @@ the field (as it is spelled in the TOML file) and the value.
 
 from __future__ import annotations
 
+import json
 import math
 import tomllib
 from dataclasses import dataclass
@@ -33,7 +34,7 @@ def _positive_finite_array(name: str, values: Any) -> np.ndarray:
     bad = np.flatnonzero(~np.isfinite(array) | (array <= 0.0))
     if bad.size:
         i = int(bad[0])
-        raise SceneError(f"{name}[{i}] must be a positive finite number, got {array[i]!r}")
+        raise SceneError(f"{name}[{i}] must be a positive finite number, got {float(array[i])!r}")
     array.flags.writeable = False
     return array
 
@@ -406,6 +407,9 @@ def scene_from_dict(data: dict, name: str = "scene") -> Scene:
         for key in ("length", "elements", "section"):
             if key not in bar_data:
                 raise SceneError(f"bar.{key} is missing (or give bar.areas)")
+        if "lengths" in bar_data:
+            raise SceneError("bar.lengths goes with bar.areas; with bar.section the elements are "
+                             "equal (bar.length / bar.elements)")
         section = _table(bar_data["section"], "bar.section", _SECTION_KEYS,
                          {"shape", "diameter_start", "diameter_end"})
         if section["shape"] != "circle":
@@ -449,7 +453,7 @@ def scene_to_toml(scene: Scene) -> str:
     moduli = np.unique(bar.youngs_modulus)
     if moduli.size != 1:
         raise SceneError("scene_to_toml: a bar with several moduli has no TOML form yet")
-    lines = [f"name = {scene.name!r}".replace("'", '"'), "", "[material]",
+    lines = [f"name = {json.dumps(scene.name)}", "", "[material]",  # JSON strings are TOML
              f"youngs_modulus = {float(moduli[0])!r}"]
     if bar.yield_stress is not None:
         lines.append(f"yield_stress = {bar.yield_stress!r}")

@@ -56,7 +56,9 @@ def solve_lagrange(model: Model, contact: str, *, max_iterations: int | None = N
 
     def update(active: np.ndarray, u: np.ndarray, lam: np.ndarray) -> np.ndarray:
         pen = C @ u - g
-        disp_tol = DECISION_RTOL * max(np.abs(u).max(initial=0.0), np.abs(g).max(initial=0.0))
+        # |P| / max diag K keeps the scale physical when the exact u is 0 (closed zero gaps)
+        disp_tol = DECISION_RTOL * max(np.abs(u).max(initial=0.0), np.abs(g).max(initial=0.0),
+                                       np.abs(P).max(initial=0.0) / K.diagonal().max())
         force_tol = DECISION_RTOL * max(np.abs(P).max(initial=0.0), np.abs(lam).max(initial=0.0))
         return np.where(active, lam > -force_tol, pen > disp_tol)
 

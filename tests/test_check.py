@@ -1,0 +1,180 @@
+"""The independent check: hand-made right and wrong answers, and the Result's JSON.
+
+The scene is small enough to solve by hand. A cantilever of two 1 m elements, E = 200 GPa,
+areas 1e-3 and 5e-4 m², so k_0 = 2e8 N/m and k_1 = 1e8 N/m, and the tip's flexibility
+f_2 = 1/k_0 + 1/k_1 = 1.5e-8 m/N. A "+" wall 0.15 mm beyond the tip (node 2), so g / f_2 = 1e4 N.
+
+With F = 30 kN at the tip, the tip reaches the wall and λ = F − g/f_2 = 20 kN: both elements
+carry F − λ = 10 kN, u = [0, 0.05, 0.15] mm, and the support pulls back with R = −10 kN.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import contactqp
+from contactqp import TOLERANCES, Bar, Load, Scene, Support, Tolerances, Wall
+
+GAP = 1.5e-4  # m
+U_CONTACT = [0.0, 5e-5, 1.5e-4]  # m: 10 kN through k_0 = 2e8 N/m, then through k_1 = 1e8 N/m
+
+
+def hand_scene(force: float = 3e4, gap: float = GAP) -> Scene:
+    bar = Bar.from_areas([1e-3, 5e-4], 2e11, lengths=[1.0, 1.0])
+    return Scene(bar, (Support(0),), (Load(2, force),), (Wall(2, gap, "+"),))
+
+
+def run_check(scene, u, contact_force, reactions, contact="inequality", **kwargs):
+    return contactqp.check(scene, np.array(u, dtype=float), np.array(contact_force, dtype=float),
+                           np.array(reactions, dtype=float), contact, **kwargs)
+
+
+# --------------------------------------------------------------------------------------------
+# Right answers
+
+
+@pytest.mark.parametrize("contact", ["inequality", "equality"])
+def test_hand_solution_is_verified(contact):
+    found = run_check(hand_scene(), U_CONTACT, [2e4], [-1e4], contact)
+    assert found.verified and found.physical
+    assert found.message == ""
+    # the hand numbers are decimal, not binary: a few ulp of round-off in every residual
+    assert all(value <= 1e-12 for value in found.residuals.values() if value is not None)
+
+
+def test_open_gap_with_no_force_is_verified():
+    # 5 kN moves the tip by 5e3 · f_2 = 0.075 mm: half way to the wall
+    found = run_check(hand_scene(force=5e3), [0.0, 2.5e-5, 7.5e-5], [0.0], [-5e3])
+    assert found.verified and found.physical
+    assert found.residuals["complementarity"] == 0.0  # λ = 0 exactly: nothing to multiply
+
+
+def test_library_solution_of_the_hand_scene_is_the_hand_solution():
+    result = contactqp.solve(hand_scene())
+    # κ(K) ~ 10: a direct solve reproduces the hand numbers to a few ulp
+    np.testing.assert_allclose(result.u, U_CONTACT, rtol=1e-12, atol=1e-12 * GAP)
+    np.testing.assert_allclose(result.contact_force, [2e4], rtol=1e-12)  # as above
+    np.testing.assert_allclose(result.reactions, [-1e4], rtol=1e-12)  # as above
+    assert result.verified
+
+
+# --------------------------------------------------------------------------------------------
+# Wrong answers
+
+
+def test_perturbed_displacement_fails_equilibrium():
+    u = list(U_CONTACT)
+    u[1] *= 1.001  # 0.05 µm more: the elements' forces change by k · 5e-8 m = 5 to 10 N
+    found = run_check(hand_scene(), u, [2e4], [-1e4])
+    assert not found.verified
+    assert "equilibrium" in found.message
+    assert "feasibility" not in found.message  # the tip did not move: still on the wall
+
+
+def test_perturbation_within_a_loose_tolerance_is_accepted():
+    u = list(U_CONTACT)
+    u[1] *= 1.001  # about 10 N out of balance against a force scale of 30 kN: ~3e-4
+    loose = Tolerances(equilibrium=1e-2)  # 30 times the imbalance
+    assert run_check(hand_scene(), u, [2e4], [-1e4], tolerances=loose).verified
+
+
+def test_wrong_sign_force_fails_sign_and_equilibrium():
+    found = run_check(hand_scene(), U_CONTACT, [-2e4], [-1e4])
+    assert not found.verified
+    assert not found.physical
+    assert "sign" in found.message
+    assert "equilibrium" in found.message  # the flipped force no longer balances the load
+    assert "pulls" in found.message
+
+
+def test_pulling_wall_in_equilibrium_fails_only_sign():
+    """F = 5 kN cannot reach the wall; holding the tip on it anyway takes λ = F − 1e4 = −5 kN:
+    the same u and R as the contact answer, in perfect equilibrium, but the wall pulls."""
+    scene = hand_scene(force=5e3)
+    found = run_check(scene, U_CONTACT, [-5e3], [-1e4])
+    assert not found.verified
+    assert not found.physical
+    assert found.message.startswith("sign residual")
+    assert "equilibrium" not in found.message
+    # sign residual = 5 kN pulled / force scale 10 kN (internal forces and the reaction)
+    assert found.residuals["sign"] == pytest.approx(0.5, rel=1e-12)  # decimal data: a few ulp
+    # equality contact allows the pull: verified, but not physical
+    equality = run_check(scene, U_CONTACT, [-5e3], [-1e4], "equality")
+    assert equality.verified
+    assert not equality.physical
+    assert "pulls" in equality.message
+
+
+def test_penetrating_displacement_fails_feasibility():
+    """The free answer, as if there were no wall: 30 kN through both elements."""
+    u_free = [0.0, 1.5e-4, 4.5e-4]
+    found = run_check(hand_scene(), u_free, [0.0], [-3e4])
+    assert not found.verified
+    assert "feasibility" in found.message
+    assert "equilibrium" not in found.message  # it is in equilibrium, just past the wall
+    # 0.3 mm past the wall over the displacement scale max |u| = 0.45 mm
+    assert found.residuals["feasibility"] == pytest.approx(2.0 / 3.0, rel=1e-12)  # a few ulp
+
+
+def test_force_across_an_open_gap_fails_complementarity():
+    """The contact answer checked against a wall 0.2 mm away: 20 kN pushed across 0.05 mm."""
+    found = run_check(hand_scene(gap=2e-4), U_CONTACT, [2e4], [-1e4])
+    assert not found.verified
+    assert "complementarity" in found.message
+    assert "feasibility" not in found.message and "equilibrium" not in found.message
+    # |λ · pen| / (F · U) = 2e4 · 5e-5 / (3e4 · 2e-4), U the largest gap
+    assert found.residuals["complementarity"] == pytest.approx(1.0 / 6.0, rel=1e-12)  # ulps
+
+
+def test_open_gap_fails_equality_feasibility():
+    found = run_check(hand_scene(force=5e3), [0.0, 2.5e-5, 7.5e-5], [0.0], [-5e3], "equality")
+    assert not found.verified
+    assert "feasibility" in found.message
+    assert found.residuals["complementarity"] is None and found.residuals["sign"] is None
+
+
+@pytest.mark.parametrize("where", ["u", "contact_force", "reactions"])
+@pytest.mark.parametrize("contact", ["inequality", "equality"])
+def test_nan_is_never_verified(where, contact):
+    answer = {"u": list(U_CONTACT), "contact_force": [2e4], "reactions": [-1e4]}
+    answer[where][-1] = math.nan
+    found = run_check(hand_scene(), answer["u"], answer["contact_force"], answer["reactions"],
+                      contact)
+    assert not found.verified
+    assert "equilibrium" in found.message
+
+
+def test_nan_contact_force_is_not_called_physical():
+    found = run_check(hand_scene(), U_CONTACT, [math.nan], [-1e4])
+    assert not found.residuals["sign"] <= TOLERANCES.sign
+    assert not found.physical
+
+
+# --------------------------------------------------------------------------------------------
+# The Result as JSON
+
+
+@pytest.mark.parametrize("method", ["lagrange", "penalty"])
+@pytest.mark.parametrize("contact", ["inequality", "equality"])
+def test_result_to_json(method, contact):
+    result = contactqp.solve(hand_scene(), method, contact)
+    data = json.loads(result.to_json())
+    for key in ("u", "contact_force", "reactions", "penetration", "verified", "residuals",
+                "method", "time"):
+        assert key in data
+    assert data["method"] == method
+    assert data["contact"] == contact
+    assert data["u"] == result.u.tolist()  # JSON round-trips a float exactly
+    assert data["contact_force"] == result.contact_force.tolist()
+    assert data["reactions"] == result.reactions.tolist()
+    assert data["penetration"] == result.penetration.tolist()
+    assert data["verified"] is result.verified is True
+    assert set(data["residuals"]) == {"equilibrium", "feasibility", "complementarity", "sign"}
+    if contact == "equality":
+        assert data["residuals"]["complementarity"] is None
+    assert isinstance(data["time"], float) and data["time"] >= 0.0
+    assert data == result.to_dict()
