@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import contactqp
-from contactqp.model import build_model, condense
+from contactqp.model import build_model, condense, wall_forces
 
 METHODS = [("lagrange", {}), ("augmented", {}), ("qp", {"backend": "clarabel", "accuracy": "high"}),
            ("qp", {"backend": "osqp", "accuracy": "high"})]
@@ -38,7 +38,7 @@ def scenes(draw):
                            tuple(walls))
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=25, deadline=None)
 @given(scenes())
 def test_condensed_equals_full_for_the_explicit_methods(scene):
     full = contactqp.solve(scene)
@@ -53,7 +53,10 @@ def test_condensed_equals_full_for_the_explicit_methods(scene):
         condensed = contactqp.solve(scene, method, formulation="condensed")
         assert condensed.verified, condensed.message
         # both are exact up to round-off of a dense inverse of S (cond(S) <= ~1e8 here)
-        assert np.allclose(condensed.contact_force, full.contact_force, rtol=1e-7,
+        # the net wall force on each node: a node clamped between two zero-gap walls may carry
+        # any equal pair λ₊ = λ₋ >= 0 (they cancel), so only the net force is unique
+        assert np.allclose(wall_forces(scene, condensed.contact_force),
+                           wall_forces(scene, full.contact_force), rtol=1e-7,
                            atol=1e-9 * force_scale)
         assert np.allclose(condensed.u, full.u, rtol=1e-7, atol=1e-9 * disp_scale)
 
