@@ -8,7 +8,8 @@ every contact force. No solver's own status is trusted; it is recorded beside th
 Residuals (all dimensionless, ∞-norms):
     equilibrium      section equilibrium: at every cut through the bar, the element force from u
                      against the force that the loads, walls (W) and supports (R) on one side
-                     need: ‖cumsum(K u − P − R − W)‖ / F, F the largest nodal force term. The
+                     need: ‖cumsum(K u − P − R − W)‖ / F, F the largest nodal force term
+                     (at least k_min × largest gap, the force that closes it). The
                      last cut is the balance of the whole bar. A per-node residual is not
                      enough: n residuals within tolerance add up along a long bar (OSQP on a
                      10⁴-element bar: 8e-7 per node, 0.56 % in the contact force)
@@ -86,8 +87,12 @@ def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.
     walls = wall_forces(scene, contact_force)
     support_forces = np.zeros(scene.n_nodes)
     support_forces[[s.node for s in scene.supports]] = reactions
-    force_scale = max(_norm(loads), _norm(internal), _norm(walls), _norm(support_forces), _TINY)
     gaps = np.array([w.gap for w in scene.walls], dtype=float)
+    # k·gap, the force that closes the largest gap through the softest element, keeps F
+    # physical when nothing is loaded and every force is round-off
+    closing = float(scene.bar.stiffness.min()) * _norm(gaps)
+    force_scale = max(_norm(loads), _norm(internal), _norm(walls), _norm(support_forces), closing,
+                      _TINY)
     disp_scale = max(_norm(u), _norm(gaps), force_scale / float(scene.bar.stiffness.max()), _TINY)
     pen = penetration(scene, u)
     lam = np.asarray(contact_force, dtype=float)

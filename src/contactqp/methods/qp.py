@@ -11,10 +11,11 @@ units of F: λ = F·μ. The convention is the model's: L = Π + λᵀ(C D − g)
 which a wall pushes the bar. With ``scale=False``, U = 1 m and F = 1 N (the QP in SI units).
 
 Scaling (:func:`scales`): k is the stiffness the loaded and walled nodes see together,
-1 / ‖K⁻¹e‖∞ with e = 1 at those nodes (one banded solve); U = max(largest gap, largest load / k),
-the larger of the displacements the gaps and the loads set; F = k·U. Then q̂, ĝ and the expected
-multipliers are O(1), and k depends only on where loads and walls are, so a new load or gap
-changes q̂ and ĝ alone (the cvxpy backend re-solves without re-canonicalising).
+1 / ‖K⁻¹e‖∞ with e = 1 at those nodes; U = max(largest gap, ‖K⁻¹P‖∞), the larger of the gaps
+and the displacement the loads cause without walls (both from one banded factorisation);
+F = k·U. Then q̂, ĝ and the expected multipliers are O(1), and k depends only on where loads
+and walls are, so a new load or gap changes q̂ and ĝ alone (the cvxpy backend re-solves
+without re-canonicalising).
 
 Backends (one module each, one contract, a registry filled by try-import):
 
@@ -32,7 +33,10 @@ Backends (one module each, one contract, a registry filled by try-import):
 :data:`DUAL_SIGNS` holds, in this one place, the sign that turns each backend's dual into μ
 (every one of them writes the stationarity condition K̂x + q̂ + Cᵀμ = 0, so all are +1; the
 tests check each). :data:`ACCURACY` maps ``accuracy="default" | "high"`` to each solver's own
-settings (table in its docstring).
+settings (the table is in :func:`accuracy_settings`); :data:`PRESCALED` turns off Clarabel's and
+OSQP's own equilibration on data contactqp has scaled. Solvers that densify K are not run above
+:data:`DENSE_LIMIT` unknowns; that, and anything a solver raises, gives a NaN Solution that
+claims nothing, which the Result's check flags.
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ from __future__ import annotations
 import importlib
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from types import ModuleType
 from typing import Any
 
@@ -47,7 +52,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from contactqp import linalg
-from contactqp.errors import ContactqpError, OptionError, SolverNotAvailable
+from contactqp.errors import ContactqpError, OptionError, SolverError, SolverNotAvailable
 from contactqp.methods._qp_outcome import QPOutcome, failed_outcome
 from contactqp.model import Model, build_model
 from contactqp.result import Solution
@@ -86,6 +91,16 @@ class QPProblem:
     displacement_scale: float = 1.0
     force_scale: float = 1.0
 
+    @cached_property
+    def K_upper(self) -> sp.csc_array:
+        """The upper triangle of K (CSC), as OSQP and Clarabel take it (by masking the index
+        arrays: scipy's triu costs more than a small solve)."""
+        K, n = self.K, self.n
+        columns = np.repeat(np.arange(n), np.diff(K.indptr))
+        keep = K.indices <= columns
+        indptr = np.concatenate(([0], np.cumsum(np.bincount(columns[keep], minlength=n))))
+        return sp.csc_array((K.data[keep], K.indices[keep], indptr), shape=K.shape)
+
     @property
     def stiffness_scale(self) -> float:
         """k = F / U (N/m): K_SI = k·K."""
@@ -113,21 +128,29 @@ class QPProblem:
 def scales(model: Model) -> tuple[float, float]:
     """(U in m, F in N): the displacement and force scales of a model (module docstring).
 
-    k = 1 / ‖K⁻¹e‖∞, e = 1 at every loaded or walled free node: the stiffness of the bar as the
-    loads and walls see it; it depends on the scene's structure only. Without loads or walls it
-    falls back to the largest diagonal of K; U falls back to 1 m when there is neither a load nor
-    a gap (the answer is then u = 0 at any scale).
+    k = 1 / ‖K⁻¹e‖∞, e = 1 at every loaded or walled free node: the stiffness of the bar as
+    the loads and walls see it, from the scene's structure alone. U = max(largest gap,
+    ‖K⁻¹P‖∞), the larger of the gaps and the free (wall-less) displacement; F = k·U. Both
+    right-hand sides go through one banded Cholesky factorisation. Without loads or walls k
+    falls back to the largest diagonal of K; without loads and gaps U is 1 m (u = 0 then).
     """
-    loaded = np.flatnonzero(model.P)
-    walled = model.C.indices
     e = np.zeros(model.n_free)
-    e[np.concatenate((loaded, walled)).astype(int)] = 1.0
+    e[np.flatnonzero(model.P)] = 1.0
+    e[model.C.indices] = 1.0
+    rhs = np.column_stack((e, model.P))
+    band = model.K_band
+    if band is not None:
+        try:
+            solved = linalg.solve_spd_band(band, rhs)
+        except np.linalg.LinAlgError as error:
+            raise SolverError(f"K is not positive definite ({error})") from None
+    else:
+        solved = linalg.solve(model.K, rhs, spd=True)
     if e.any():
-        k = 1.0 / float(np.abs(linalg.solve(model.K, e, spd=True)).max())
+        k = 1.0 / float(np.abs(solved[:, 0]).max())
     else:
         k = float(model.K.diagonal().max())
-    largest_gap = float(np.abs(model.g).max(initial=0.0))
-    U = max(largest_gap, float(np.abs(model.P).max(initial=0.0)) / k)
+    U = max(float(np.abs(model.g).max(initial=0.0)), float(np.abs(solved[:, 1]).max()))
     if not U > 0.0:
         U = 1.0
     return U, k * U
@@ -144,10 +167,25 @@ def qp_from_model(model: Model, contact: str = "inequality", scale: bool = True)
     if contact not in CONTACT_KINDS:
         raise OptionError(f"contact must be one of {', '.join(CONTACT_KINDS)}; got {contact!r}")
     U, F = scales(model) if _scale_option(scale) else (1.0, 1.0)
+    band = model.K_band
+    K = _csc_from_band(band / (F / U)) if band is not None else sp.csc_array(model.K / (F / U))
     return QPProblem(
-        K=sp.csc_array(model.K / (F / U)), q=-model.P / F, C=sp.csc_array(model.C),
-        g=model.g / U, contact=contact, displacement_scale=U, force_scale=F,
+        K=K, q=-model.P / F, C=sp.csc_array(model.C), g=model.g / U, contact=contact,
+        displacement_scale=U, force_scale=F,
     )
+
+
+def _csc_from_band(band: np.ndarray) -> sp.csc_array:
+    """The symmetric tridiagonal matrix of a lower band (diagonal; sub-diagonal) as CSC,
+    built from its index arrays (no sparse conversions: the QP method's main fixed cost)."""
+    n = band.shape[1]
+    diagonal, sub = band[0], band[1, :-1]
+    rows = np.stack((np.arange(n) - 1, np.arange(n), np.arange(n) + 1), axis=1)
+    data = np.stack((np.concatenate(([0.0], sub)), diagonal, np.concatenate((sub, [0.0]))), axis=1)
+    keep = (rows >= 0) & (rows < n)
+    counts = keep.sum(axis=1)
+    indptr = np.concatenate(([0], np.cumsum(counts)))
+    return sp.csc_array((data[keep], rows[keep], indptr), shape=(n, n))
 
 
 def qp_problem(scene: Scene, contact: str = "inequality", scale: bool = True) -> QPProblem:
@@ -155,7 +193,8 @@ def qp_problem(scene: Scene, contact: str = "inequality", scale: bool = True) ->
 
     With ``scale=True`` (the default, as for ``solve(method="qp")``) the data are
     non-dimensional; :meth:`QPProblem.to_si` maps a solution and its multipliers back to metres
-    and newtons. With ``scale=False`` they are in SI units (K in N/m, q in N, g in m).
+    and newtons. With ``scale=False`` they are in SI units (K in N/m, q in N, g in m). A
+    solver's own equilibration may be better off on the scaled data (see :data:`PRESCALED`).
     """
     return qp_from_model(build_model(scene), contact, scale)
 
@@ -179,8 +218,8 @@ DUAL_SIGNS: dict[str, dict[str, float]] = {
 ACCURACY: dict[str, dict[str, dict[str, Any]]] = {
     "clarabel": {
         "default": {"tol_gap_abs": 1e-8, "tol_gap_rel": 1e-8, "tol_feas": 1e-8, "tol_ktratio": 1e-6},
-        "high": {"tol_gap_abs": 1e-12, "tol_gap_rel": 1e-12, "tol_feas": 1e-12,
-                 "tol_ktratio": 1e-10},
+        "high": {"tol_gap_abs": 1e-10, "tol_gap_rel": 1e-10, "tol_feas": 1e-10,
+                 "tol_ktratio": 1e-8},
     },
     "osqp": {
         "default": {"eps_abs": 1e-3, "eps_rel": 1e-3, "max_iter": 4000, "polishing": True},
@@ -197,7 +236,7 @@ ACCURACY: dict[str, dict[str, dict[str, Any]]] = {
     },
     "cvxopt": {
         "default": {"abstol": 1e-7, "reltol": 1e-6, "feastol": 1e-7},
-        "high": {"abstol": 1e-10, "reltol": 1e-10, "feastol": 1e-10},
+        "high": {"abstol": 1e-9, "reltol": 1e-9, "feastol": 1e-9},
     },
     "piqp": {
         "default": {"eps_abs": 1e-8, "eps_rel": 1e-9},
@@ -205,7 +244,8 @@ ACCURACY: dict[str, dict[str, dict[str, Any]]] = {
     },
     "proxqp": {
         "default": {"eps_abs": 1e-5, "eps_rel": 0.0},
-        "high": {"eps_abs": 1e-10, "eps_rel": 0.0},
+        "high": {"eps_abs": 1e-10, "eps_rel": 0.0, "check_duality_gap": True,
+                 "eps_duality_gap_abs": 1e-10, "eps_duality_gap_rel": 0.0},
     },
     "qpalm": {
         "default": {"eps_abs": 1e-4, "eps_rel": 1e-4},
@@ -217,43 +257,67 @@ ACCURACY: dict[str, dict[str, dict[str, Any]]] = {
     },
     "highs": {
         "default": {"primal_feasibility_tolerance": 1e-7, "dual_feasibility_tolerance": 1e-7},
-        "high": {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10},
+        "high": {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10,
+                 "qp_regularization_value": 1e-12},
     },
     "quadprog": {"default": {}, "high": {}},
 }
-ACCURACY_DOC = """
-``accuracy`` → each solver's own settings (the scaled QP is O(1), so absolute and relative
-tolerances are alike). "default" is the solver's own default, written out so that every backend
-passes the same values (cvxpy would otherwise substitute its own for some, e.g. OSQP 1e-5);
-the one change is OSQP's polishing, on in both (cheap, and passed explicitly because cvxpy
-turns it off on a re-solve). "high" is near what each solver reaches in double precision.
 
-    =========  ===========================================  =====================  =============
-    solver     settings                                     "default"              "high"
-    =========  ===========================================  =====================  =============
-    clarabel   tol_gap_abs, tol_gap_rel, tol_feas           1e-8                   1e-12
-               tol_ktratio                                  1e-6                   1e-10
-    osqp       eps_abs, eps_rel                             1e-3                   1e-9
-               max_iter; polishing                          4000; on               1e5; on
-    scs        eps_abs, eps_rel; max_iters                  1e-4; 1e5              1e-9; 1e5
-    ecos       abstol, reltol, feastol                      1e-8                   1e-10
-    cvxopt     abstol, reltol, feastol                      1e-7, 1e-6, 1e-7       1e-10
-    piqp       eps_abs, eps_rel                             1e-8, 1e-9             1e-10, 1e-11
-    proxqp     eps_abs (eps_rel 0)                          1e-5                   1e-10
-    qpalm      eps_abs, eps_rel                             1e-4                   1e-10
-    daqp       primal_tol (dual_tol 1e-12)                  1e-6                   1e-10
-    highs      primal/dual_feasibility_tolerance            1e-7                   1e-10
-    quadprog   none (a dual active-set method, exact up to round-off)
-    other      the solver's defaults for both
-    =========  ===========================================  =====================  =============
-"""
+# Settings added when contactqp has scaled the QP itself. Measured on a 1e4-element bar at
+# "default": Clarabel's equilibration on top of ours 1.2e-8 off in λ, off 9e-11; at 1e5
+# elements on: "AlmostSolved" 1.3e-4 off, off: "Solved" 5e-10 off in 6 iterations. OSQP's
+# Ruiz scaling on: "solved" 2.5e-4 off (a false success), off: 5e-12 off.
+PRESCALED: dict[str, dict[str, Any]] = {
+    "clarabel": {"equilibrate_enable": False},
+    "osqp": {"scaling": 0},
+}
 
 
-def accuracy_settings(solver: str, accuracy: str) -> dict[str, Any]:
-    """The settings ``accuracy`` means for ``solver`` (any case); see :data:`ACCURACY_DOC`."""
+def accuracy_settings(solver: str, accuracy: str, scaled: bool = False) -> dict[str, Any]:
+    """The settings ``accuracy`` means for ``solver`` (any case), plus :data:`PRESCALED` when
+    contactqp has ``scaled`` the QP.
+
+    The scaled QP is O(1), so absolute and relative tolerances are alike. "default" is the
+    solver's own default, written out so that every backend passes the same values (cvxpy
+    would substitute its own for some, e.g. OSQP 1e-5); the one change is OSQP's polishing, on
+    in both (cheap, and passed explicitly because cvxpy turns it off on a re-solve). "high" is
+    near what each solver reaches in double precision.
+
+        =========  ==========================================  ===================  ============
+        solver     settings                                    "default"            "high"
+        =========  ==========================================  ===================  ============
+        clarabel   tol_gap_abs, tol_gap_rel, tol_feas           1e-8                   1e-10 (d)
+                   tol_ktratio                                  1e-6                   1e-8
+        osqp       eps_abs, eps_rel                             1e-3                   1e-9
+                   max_iter; polishing                          4000; on               1e5; on
+        scs        eps_abs, eps_rel; max_iters                  1e-4; 1e5              1e-9; 1e5
+        ecos       abstol, reltol, feastol                      1e-8                   1e-10
+        cvxopt     abstol, reltol, feastol                      1e-7, 1e-6, 1e-7       1e-9 (a)
+        piqp       eps_abs, eps_rel                             1e-8, 1e-9             1e-10, 1e-11
+        proxqp     eps_abs (eps_rel 0)                          1e-5                   1e-10
+                   duality gap checked, eps_duality_gap_abs     off                    1e-10 (b)
+        qpalm      eps_abs, eps_rel                             1e-4                   1e-10
+        daqp       primal_tol (dual_tol 1e-12)                  1e-6                   1e-10
+        highs      primal/dual_feasibility_tolerance            1e-7                   1e-10
+                   qp_regularization_value                      1e-7                   1e-12 (c)
+        quadprog   none (a dual active-set method, exact up to round-off)
+        other      the solver's defaults for both
+        =========  ==========================================  ===================  ============
+
+    (a) cvxpy hands CVXOPT a cone rewrite of the QP, and CVXOPT fails there at 1e-10 (measured).
+    (b) Without the duality-gap test ProxQP stopped 2e-6 off in λ at eps_abs 1e-10 (measured);
+        cvxpy passes only eps_abs and eps_rel on to ProxQP, so through cvxpy the gap is unchecked.
+    (c) HiGHS regularises the Hessian by 1e-7 by default, which leaves ~1e-7 in λ (measured).
+    (d) At 1e-12 Clarabel stops "AlmostSolved" on a 1e4-element bar, though 1e-10 right.
+
+    With ``scale=True`` the QP is already scaled, and :data:`PRESCALED` turns off Clarabel's
+    and OSQP's own equilibration (through every backend), which measured better.
+    """
     if accuracy not in ACCURACIES:
         raise OptionError(f"accuracy must be one of {', '.join(ACCURACIES)}; got {accuracy!r}")
-    return dict(ACCURACY.get(solver.lower(), {}).get(accuracy, {}))
+    name = solver.lower()
+    settings = dict(ACCURACY.get(name, {}).get(accuracy, {}))
+    return {**settings, **PRESCALED.get(name, {})} if scaled else settings
 
 
 # ---------------------------------------------------------------------------------------------
@@ -277,9 +341,13 @@ for _name, (_module, _pip) in BACKEND_MODULES.items():
         BACKENDS[_name] = None
         MISSING[_name] = str(_error)
 
-# Chosen by measurement (benchmarks/qp_overhead.py and the survey in the issue): Clarabel's
-# interior point is accurate to ~1e-12 on every scene tried, claims success only when right,
-# and costs about as much as the explicit Lagrange solve plus a few ms.
+# Chosen by measurement (benchmarks/qp_survey.py, benchmarks/qp_overhead.py). Clarabel is a
+# core dependency, and at "default" it was verified on every scene tried (the default scene,
+# walls on both sides, 1e4 and 1e5 elements: λ within 1e-10, 5e-10 at 1e5), never claimed
+# success when wrong, and is the fastest direct call (27 µs on the default scene, 19 ms at 1e4).
+# Scaling on: in SI units HiGHS (7.6 % off), QPALM (1 %) and quadprog (no solution) fail on the
+# default scene, and OSQP's high accuracy needs 17 s instead of 0.04 s at 1e4 elements; scaled,
+# only ProxQP at its loose default tolerance did worse (1.7e-2 off against 1e-7 in SI).
 DEFAULT_BACKEND = "clarabel"
 DEFAULT_SCALE = True
 
@@ -287,7 +355,7 @@ DEFAULT_SCALE = True
 # dense matrix alone would take DENSE_LIMIT² · 8 bytes (200 MB) and the solve O(n³).
 DENSE_LIMIT = 5000
 DENSE_SOLVERS = {("qpsolvers", "daqp"), ("qpsolvers", "quadprog"), ("qpsolvers", "ecos"),
-                 ("cvxpy", "DAQP")}
+                 ("cvxpy", "DAQP"), ("cvxpy", "PROXQP")}
 
 
 @dataclass(frozen=True)
@@ -391,9 +459,9 @@ def solve_qp(model: Model, contact: str, *, backend: str = DEFAULT_BACKEND,
              scale: bool = DEFAULT_SCALE) -> Solution:
     """Solve the contact problem as a QP with ``backend`` ("clarabel", "osqp", "cvxpy",
     "qpsolvers") and ``solver`` (a name the backend knows; None: its default), at
-    ``accuracy`` "default" or "high" (:data:`ACCURACY_DOC`), scaled or in SI (``scale``)."""
+    ``accuracy`` "default" or "high" (:func:`accuracy_settings`), scaled or in SI (``scale``)."""
     module, name = resolve_solver(backend, solver)
-    settings = accuracy_settings(name, accuracy)
+    settings = accuracy_settings(name, accuracy, scaled=_scale_option(scale))
     start = time.perf_counter()
     qp = qp_from_model(model, contact, scale)
     built = time.perf_counter()
@@ -417,7 +485,7 @@ def solve_qp(model: Model, contact: str, *, backend: str = DEFAULT_BACKEND,
 
 
 __all__ = [
-    "ACCURACY", "ACCURACY_DOC", "BACKENDS", "DEFAULT_BACKEND", "DEFAULT_SCALE", "DUAL_SIGNS",
+    "ACCURACY", "BACKENDS", "DEFAULT_BACKEND", "DEFAULT_SCALE", "DUAL_SIGNS", "PRESCALED",
     "QPOutcome", "QPProblem", "QPSolverInfo", "available_qp_solvers", "qp_from_model",
     "qp_problem", "scales", "solve_qp",
 ]

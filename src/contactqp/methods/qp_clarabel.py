@@ -10,7 +10,6 @@ import time
 from typing import TYPE_CHECKING, Any
 
 import clarabel
-import scipy.sparse as sp
 
 from contactqp.methods._qp_outcome import QPOutcome, vector_or_nan
 
@@ -40,7 +39,7 @@ def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
     m = qp.g.size
     cone = clarabel.NonnegativeConeT(m) if qp.contact == "inequality" else clarabel.ZeroConeT(m)
     engine = clarabel.DefaultSolver(
-        sp.csc_matrix(sp.triu(qp.K, format="csc")), qp.q, sp.csc_matrix(qp.C), qp.g,
+        qp.K_upper, qp.q, qp.C, qp.g,
         [cone] if m else [], options,
     )
     setup = time.perf_counter()

@@ -37,7 +37,7 @@ def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
     start = time.perf_counter()
     lower = np.full(qp.g.size, -np.inf) if qp.contact == "inequality" else qp.g
     engine = osqp.OSQP()
-    engine.setup(sp.csc_matrix(sp.triu(qp.K, format="csc")), qp.q, sp.csc_matrix(qp.C), lower,
+    engine.setup(sp.csc_matrix(qp.K_upper), qp.q, sp.csc_matrix(qp.C), lower,
                  qp.g, verbose=False, **settings)
     setup = time.perf_counter()
     found = engine.solve(raise_error=False)

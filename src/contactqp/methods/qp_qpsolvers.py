@@ -26,8 +26,9 @@ KNOWN_SOLVERS = {
     "qpalm": "qpalm", "quadprog": "quadprog",
 }
 DENSE_INPUT = {"quadprog"}  # refuses sparse matrices
-# Settings each solver needs whatever the accuracy: ProxQP's sparse backend (never a dense K).
-FIXED_SETTINGS = {"proxqp": {"backend": "sparse"}}
+# Settings each solver needs whatever the accuracy: ProxQP's sparse backend (never a dense K);
+# OSQP's raise_error=False (a failure is a status, as for every backend, and no warning).
+FIXED_SETTINGS = {"proxqp": {"backend": "sparse"}, "osqp": {"raise_error": False}}
 
 
 def installed_solvers() -> tuple[str, ...]:
