@@ -142,3 +142,16 @@ def test_python_dash_m_runs_the_cli():
                           capture_output=True, text=True, timeout=120, check=False)
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["verified"] is True
+
+
+def test_solvers_lists_installed_pairs_and_install_hints(capsys, monkeypatch):
+    from contactqp.methods import qp
+
+    code, out, _ = run(capsys, "solvers")
+    assert code == 0
+    installed = [f"{r.backend}/{r.solver}" for r in qp.available_qp_solvers() if r.available]
+    assert installed and all(pair in out for pair in installed)
+    monkeypatch.setitem(qp.BACKENDS, "osqp", None)  # as if osqp were not installed
+    code, out, _ = run(capsys, "solvers")
+    line = next(row for row in out.splitlines() if row.startswith("osqp/"))
+    assert " no " in line and "pip install" in line

@@ -150,9 +150,16 @@ def command_penalty_sweep(args: argparse.Namespace) -> int:
 
 
 def command_solvers(args: argparse.Namespace) -> int:
-    from contactqp.methods.qp import solver_table
+    from contactqp.methods.qp import DEFAULT_BACKEND, available_qp_solvers
 
-    print(solver_table())
+    rows = available_qp_solvers()
+    width = max(len(f"{r.backend}/{r.solver}") for r in rows)
+    print(f"{'backend/solver':<{width}}  installed  to add it")
+    for r in rows:
+        print(f"{r.backend + '/' + r.solver:<{width}}  {'yes' if r.available else 'no ':<9}  "
+              f"{r.install}".rstrip())
+    print(f"default: --method qp --backend {DEFAULT_BACKEND}; the comparison table runs every "
+          "installed pair")
     return 0
 
 
@@ -204,6 +211,9 @@ def main(argv: list[str] | None = None) -> int:
     except ContactqpError as error:
         print(f"contactqp: error: {error}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into head & co.: stop quietly
+        sys.stderr.close()
+        return 0
 
 
 if __name__ == "__main__":
