@@ -61,7 +61,9 @@ def notes(runs: list[Run]) -> list[str]:
     for run in runs:
         r = run.result
         if r is not None and r.message:
-            out.append(f"{run.label} ({run.contact}): {r.message}")
+            claim = (f" (yet the solver reported {r.status!r})"
+                     if r.claimed_success and not r.verified else "")
+            out.append(f"{run.label} ({run.contact}): {r.message}{claim}")
     reference = next((run.result for run in runs if run.result is not None and run.result.verified),
                      None)  # one stress note, from the first verified answer
     if reference is not None:
