@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
-import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -27,18 +25,11 @@ import scipy.sparse as sp
 
 import contactqp
 from contactqp.methods import qp as qpmod
+from timing import median_time  # benchmarks/ is on sys.path when a script runs
 
 OUT = Path(__file__).parent / "out"
 
 
-def median_time(function: Callable[[], object], repeats: int) -> float:
-    function()  # warm caches and imports
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def fine_scene(elements: int) -> contactqp.Scene:

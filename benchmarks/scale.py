@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import statistics
 import time
 from functools import partial
 from pathlib import Path
@@ -25,6 +24,7 @@ import scipy.linalg as sla
 import contactqp
 from contactqp.model import build_model
 from contactqp.studies import cone_contact_force
+from timing import median_time  # benchmarks/ is on sys.path when a script runs
 
 RUNS = [  # (method, options, formulation, largest size it is run at in full formulation)
     ("lagrange", {}, 10**6),
@@ -43,13 +43,6 @@ def tapered_scene(elements: int) -> contactqp.Scene:
                            (contactqp.Wall(elements, 1e-4, "+"),), name=f"taper-{elements}")
 
 
-def median_time(function, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def floor(scene: contactqp.Scene, repeats: int) -> float:
