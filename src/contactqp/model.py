@@ -51,6 +51,16 @@ class Model:
         """K in band storage, or None when K is not a chain (a condensed model)."""
         return self.stiffness if isinstance(self.stiffness, np.ndarray) else None
 
+    def solve_K(self, rhs: np.ndarray) -> np.ndarray:
+        """K⁻¹ rhs (every column of ``rhs``): one banded Cholesky factorisation for a chain
+        (LAPACK pbsv), a sparse solve otherwise. SolverError when K is not positive definite."""
+        if self.K_band is None:
+            return linalg.solve(self.K, rhs, spd=True)
+        try:
+            return linalg.solve_spd_band(self.K_band, rhs)
+        except np.linalg.LinAlgError as error:
+            raise SolverError(f"K is not positive definite ({error})") from None
+
     @cached_property
     def K(self) -> sp.csr_array:
         band = self.K_band
@@ -137,6 +147,17 @@ def build_model(scene: Scene) -> Model:
     return Model(scene, free, np.vstack((diagonal, sub)), scene.nodal_loads()[free], C, g)
 
 
+def stiffness_seen_at(model: Model, nodes: np.ndarray) -> float | None:
+    """The stiffness (N/m) that free nodes ``nodes`` see together, 1 / ‖K⁻¹e‖∞ with e = 1 at
+    those nodes: about 1/f, f the flexibility Σ L/(EA) from a support to them, so it does not
+    grow as the mesh is refined (unlike the diagonal of K). None when ``nodes`` is empty."""
+    indicator = np.zeros(model.n_free)
+    indicator[np.asarray(nodes, dtype=int)] = 1.0
+    if not indicator.any():
+        return None
+    return 1.0 / float(np.abs(model.solve_K(indicator)).max())
+
+
 @dataclass(frozen=True, eq=False)
 class Condensed:
     """A model condensed onto its contact nodes, and how to get every displacement back.
@@ -170,12 +191,12 @@ def condense(model: Model) -> Condensed:
     rhs = np.zeros((model.n_free, nodes.size + 1))
     rhs[:, 0] = model.P
     rhs[nodes, np.arange(1, nodes.size + 1)] = 1.0
+    solved = model.solve_K(rhs)
+    flexibility = solved[nodes, 1:]
     try:
-        solved = linalg.solve_spd_band(model.K_band, rhs)
-        flexibility = solved[nodes, 1:]
         stiffness = sla.inv(flexibility, check_finite=False) if nodes.size else flexibility
     except np.linalg.LinAlgError as error:
-        raise SolverError(f"condensed formulation: K is not positive definite ({error})") from None
+        raise SolverError(f"condensed formulation: the flexibility is singular ({error})") from None
     stiffness = 0.5 * (stiffness + stiffness.T)
     u0, X = solved[:, 0], solved[:, 1:]
     column = np.full(model.n_free, -1)

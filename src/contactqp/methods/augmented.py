@@ -18,7 +18,7 @@ import numpy as np
 from contactqp import linalg
 from contactqp.methods._active_set import active_set_loop
 from contactqp.methods.penalty import penalty_value
-from contactqp.model import Model
+from contactqp.model import Model, stiffness_seen_at
 from contactqp.result import Solution
 
 PENALTY_PER_STIFFNESS = 100.0  # default ε: this many times the stiffness the walls see
@@ -26,22 +26,11 @@ DEFAULT_TOLERANCE = 1e-10  # stop when an update changes λ by less than this, r
 DEFAULT_MAX_ITERATIONS = 100
 
 
-def contact_stiffness(model: Model) -> float:
-    """The stiffness the walls see (N/m): 1 / ‖K⁻¹ e‖∞, e = 1 at every node with a wall.
-
-    Unlike the diagonal of K it does not grow as the mesh is refined (it is about 1/f, f the
-    flexibility Σ L/(EA) between a support and the walls)."""
-    at_walls = np.zeros(model.n_free)
-    at_walls[model.C.indices] = 1.0
-    if not at_walls.any():
-        return 1.0
-    return 1.0 / float(np.abs(linalg.solve(model.K, at_walls, spd=True)).max())
-
-
 def default_penalty(model: Model) -> float:
     """ε = 100 × the stiffness the walls see (N/m): each update then cuts the force error
     about a hundredfold, far from the round-off of a penalty that is accurate on its own."""
-    return PENALTY_PER_STIFFNESS * contact_stiffness(model)
+    seen = stiffness_seen_at(model, model.C.indices)
+    return PENALTY_PER_STIFFNESS * (1.0 if seen is None else seen)
 
 
 def solve_augmented(model: Model, contact: str, *, penalty: float | None = None,

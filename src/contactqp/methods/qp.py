@@ -51,8 +51,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from contactqp import linalg
-from contactqp.errors import ContactqpError, OptionError, SolverError, SolverNotAvailable
+from contactqp.errors import ContactqpError, OptionError, SolverNotAvailable
 from contactqp.methods._qp_outcome import QPOutcome, failed_outcome
 from contactqp.model import Model, build_model
 from contactqp.result import Solution
@@ -137,15 +136,7 @@ def scales(model: Model) -> tuple[float, float]:
     e = np.zeros(model.n_free)
     e[np.flatnonzero(model.P)] = 1.0
     e[model.C.indices] = 1.0
-    rhs = np.column_stack((e, model.P))
-    band = model.K_band
-    if band is not None:
-        try:
-            solved = linalg.solve_spd_band(band, rhs)
-        except np.linalg.LinAlgError as error:
-            raise SolverError(f"K is not positive definite ({error})") from None
-    else:
-        solved = linalg.solve(model.K, rhs, spd=True)
+    solved = model.solve_K(np.column_stack((e, model.P)))
     if e.any():
         k = 1.0 / float(np.abs(solved[:, 0]).max())
     else:
