@@ -20,7 +20,15 @@ from contactqp import linalg
 from contactqp.errors import OptionError, SolverError
 from contactqp.scene import Bar, Scene
 
+CONTACT_KINDS = ("inequality", "equality")  # the wall rows as C D <= g, or as C D = g
 CONDENSE_LIMIT = 2000  # contact nodes: the condensed flexibility is a dense square of this size
+
+
+def contact_kind(contact: str) -> str:
+    """``contact`` if it is one of :data:`CONTACT_KINDS`, else an OptionError naming it."""
+    if contact not in CONTACT_KINDS:
+        raise OptionError(f"contact must be one of {', '.join(CONTACT_KINDS)}; got {contact!r}")
+    return contact
 
 
 @dataclass(frozen=True, eq=False)

@@ -9,6 +9,7 @@ import numpy as np
 from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, solve
 from contactqp.methods.penalty import DEFAULT_PENALTY
+from contactqp.methods.qp import available_qp_solvers
 from contactqp.result import Result
 from contactqp.scene import (
     SEED_DIAMETERS,
@@ -36,8 +37,6 @@ class Run:
 def method_runs() -> list[tuple[str, dict]]:
     """(method, options) of every run in a comparison, one per installed solver."""
     runs: list[tuple[str, dict]] = [("lagrange", {}), ("penalty", {}), ("augmented", {})]
-    from contactqp.methods.qp import available_qp_solvers
-
     for info in available_qp_solvers():
         if info.available:
             runs.append(("qp", {"backend": info.backend, "solver": info.solver}))

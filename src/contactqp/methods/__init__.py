@@ -17,11 +17,10 @@ from contactqp.methods.augmented import solve_augmented
 from contactqp.methods.lagrange import solve_lagrange
 from contactqp.methods.penalty import solve_penalty
 from contactqp.methods.qp import solve_qp
-from contactqp.model import build_model, condense
+from contactqp.model import CONTACT_KINDS, build_model, condense, contact_kind
 from contactqp.result import Result, Solution, make_result
 from contactqp.scene import Scene, seed_scene
 
-CONTACT_KINDS = ("inequality", "equality")
 FORMULATIONS = ("full", "condensed")
 
 METHODS: dict[str, Callable[..., Solution]] = {
@@ -41,8 +40,7 @@ def method_options(method: str) -> tuple[str, ...]:
 def _validate(method: str, contact: str, options: dict[str, Any]) -> Callable[..., Solution]:
     if method not in METHODS:
         raise OptionError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
-    if contact not in CONTACT_KINDS:
-        raise OptionError(f"contact must be one of {', '.join(CONTACT_KINDS)}; got {contact!r}")
+    contact_kind(contact)
     allowed = method_options(method)
     for name in options:
         if name not in allowed:
@@ -100,3 +98,7 @@ def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "
     options = {**options, "formulation": formulation} if formulation != "full" else options
     return make_result(model, solution, method=method, contact=contact, options=options,
                        timings={"build": built - start, "solve": solved - built})
+
+
+__all__ = ["CONTACT_KINDS", "FORMULATIONS", "METHODS", "check_equality_is_possible",
+           "method_options", "solve"]

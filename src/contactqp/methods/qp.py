@@ -53,11 +53,10 @@ import scipy.sparse as sp
 
 from contactqp.errors import ContactqpError, OptionError, SolverNotAvailable
 from contactqp.methods._qp_outcome import QPOutcome, failed_outcome
-from contactqp.model import Model, build_model
+from contactqp.model import Model, build_model, contact_kind
 from contactqp.result import Solution
 from contactqp.scene import Scene
 
-CONTACT_KINDS = ("inequality", "equality")
 ACCURACIES = ("default", "high")
 PIP_SOLVERS = 'pip install "contactqp[solvers]"'
 
@@ -155,8 +154,7 @@ def _scale_option(scale: Any) -> bool:
 
 def qp_from_model(model: Model, contact: str = "inequality", scale: bool = True) -> QPProblem:
     """The QP data of a model (see :class:`QPProblem`), scaled by :func:`scales` or in SI."""
-    if contact not in CONTACT_KINDS:
-        raise OptionError(f"contact must be one of {', '.join(CONTACT_KINDS)}; got {contact!r}")
+    contact_kind(contact)
     U, F = scales(model) if _scale_option(scale) else (1.0, 1.0)
     band = model.K_band
     K = _csc_from_band(band / (F / U)) if band is not None else sp.csc_array(model.K / (F / U))

@@ -43,10 +43,8 @@ KNOWN_SOLVERS = {
 }
 # Branch-and-bound wrappers of a solver that is listed anyway.
 MIXED_INTEGER_ONLY = {"ECOS_BB", "GLPK_MI"}
-# Settings a solver needs whatever the accuracy (none so far). cvxpy runs ProxQP dense; its
-# backend="sparse" path fails with proxsuite 0.7 (TypeError in proxqp.sparse.QP), so ProxQP is
-# kept dense here and limited to small bars (qp.DENSE_SOLVERS).
-FIXED_SETTINGS: dict[str, dict[str, Any]] = {}
+# cvxpy runs ProxQP dense: its backend="sparse" path fails with the installed proxsuite
+# (TypeError in proxqp.sparse.QP), so ProxQP is limited to small bars (qp.DENSE_SOLVERS).
 CACHE_SIZE = 4  # scene structures kept (each holds its canonicalised problem)
 
 
@@ -139,12 +137,11 @@ def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
         cached.loads.value = qp.q[cached.loaded]
     if cached.gaps is not None:
         cached.gaps.value = qp.g
-    options = {**FIXED_SETTINGS.get(solver, {}), **settings}
     ready = time.perf_counter()
     with warnings.catch_warnings():
         # the status says so ("optimal_inaccurate", which claims nothing), and the check decides
         warnings.filterwarnings("ignore", message="Solution may be inaccurate")
-        cached.problem.solve(solver=solver, warm_start=False, verbose=False, **options)
+        cached.problem.solve(solver=solver, warm_start=False, verbose=False, **settings)
     solved = time.perf_counter()
     stats = cached.problem.solver_stats
     status = str(cached.problem.status)
