@@ -155,6 +155,24 @@ def build_model(scene: Scene) -> Model:
     return Model(scene, free, np.vstack((diagonal, sub)), scene.nodal_loads()[free], C, g)
 
 
+def elongation_rows(model: Model) -> sp.csr_array:
+    """B (elements x free nodes): B·u_free is the elongation of every element (m), with the
+    supports' zero displacements taken out. The strain formulation's tie rows are B u − e = 0.
+    Needs a chain model (one built by :func:`build_model`)."""
+    if model.K_band is None:
+        raise OptionError("formulation='strain' needs a chain model (one built by build_model)")
+    n_elements = model.scene.bar.n_elements
+    column = np.full(model.scene.n_nodes, -1)
+    column[model.free] = np.arange(model.n_free)
+    element = np.arange(n_elements)
+    rows = np.concatenate((element, element))
+    nodes = np.concatenate((element, element + 1))  # element e joins nodes e and e + 1
+    signs = np.concatenate((-np.ones(n_elements), np.ones(n_elements)))
+    keep = column[nodes] >= 0
+    return sp.csr_array((signs[keep], (rows[keep], column[nodes][keep])),
+                        shape=(n_elements, model.n_free))
+
+
 def stiffness_seen_at(model: Model, nodes: np.ndarray) -> float | None:
     """The stiffness (N/m) that free nodes ``nodes`` see together, 1 / ‖K⁻¹e‖∞ with e = 1 at
     those nodes: about 1/f, f the flexibility Σ L/(EA) from a support to them, so it does not
@@ -164,6 +182,29 @@ def stiffness_seen_at(model: Model, nodes: np.ndarray) -> float | None:
     if not indicator.any():
         return None
     return 1.0 / float(np.abs(model.solve_K(indicator)).max())
+
+
+EXACT_WALL_STIFFNESS_LIMIT = 64  # wall nodes up to which wall_stiffness solves for S exactly
+
+
+def wall_stiffness(model: Model) -> float | None:
+    """The stiffest way the walled nodes can be moved together (N/m): the largest eigenvalue of
+    S⁻¹, S = B K⁻¹ Bᵀ the flexibility between the walled nodes (B selects them). One wall:
+    1/(K⁻¹)ᵢᵢ, the stiffness it sees (mesh-independent). Two walls on nodes joined by a stiff
+    element: that element's stretching mode. Above :data:`EXACT_WALL_STIFFNESS_LIMIT` walled
+    nodes, the bound λmax(S⁻¹) <= λmax(K_BB) <= largest row sum of |K_BB| (S⁻¹ is K_BB less a
+    positive semidefinite term; Gershgorin). None without walls."""
+    nodes = np.unique(model.C.indices)
+    if nodes.size == 0:
+        return None
+    if nodes.size > EXACT_WALL_STIFFNESS_LIMIT:
+        K_BB = model.K[nodes][:, nodes]
+        return float(np.abs(K_BB).sum(axis=1).max())
+    selector = np.zeros((model.n_free, nodes.size))
+    selector[nodes, np.arange(nodes.size)] = 1.0
+    flexibility = model.solve_K(selector)[nodes]
+    smallest = float(sla.eigvalsh(0.5 * (flexibility + flexibility.T), check_finite=False)[0])
+    return 1.0 / smallest if smallest > 0.0 else float(np.abs(model.K.diagonal()[nodes]).max())
 
 
 @dataclass(frozen=True, eq=False)

@@ -9,15 +9,25 @@ Residuals (all dimensionless, ∞-norms):
     equilibrium      section equilibrium: at every cut through the bar, the element force from u
                      against the force that the loads, walls (W) and supports (R) on one side
                      need: ‖cumsum(K u − P − R − W)‖ / F, F the largest nodal force term
-                     (at least k_min × largest gap, the force that closes it). The
-                     last cut is the balance of the whole bar. A per-node residual is not
-                     enough: n residuals within tolerance add up along a long bar (OSQP on a
+                     and at least the force the scene makes: the largest load, and
+                     k_min × |gap| of a wall that starts past its node. The last cut is the
+                     balance of the whole bar. A per-node residual is not enough: n
+                     residuals within tolerance add up along a long bar (OSQP on a
                      10⁴-element bar: 8e-7 per node, 0.56 % in the contact force)
     feasibility      inequality: max(0, max penetration) / U; equality: max |penetration| / U,
-                     U the displacement scale max(‖u‖, largest gap, F / k_max): the last
-                     term, F over the stiffest element, keeps U physical when the exact
-                     answer is u = 0 (a closed zero gap) and ‖u‖ is round-off
-    complementarity  max |λᵢ · penetrationᵢ| / (F · U)          (inequality contact)
+                     U the displacement scale max(‖u‖, F / k_max): the last term, F over
+                     the stiffest element, keeps U physical when the exact answer is u = 0
+                     (a closed zero gap) and ‖u‖ is round-off. Open gaps are not scales: a
+                     far wall would hide a wrong force at a near one (measured: Clarabel,
+                     81 N on a 1 N load pulling away from a zero-gap wall, once "verified"
+                     because a second wall 0.19 mm away set U). Only in a scene with no
+                     loads and no wall past its node (u = 0, λ = 0 exactly) do the gaps set
+                     U, and k_min × largest gap F
+    complementarity  max min(λᵢ⁺ / F, gapᵢ⁺ / U), gap = −penetration, x⁺ = max(x, 0)
+                     (inequality contact): a wall
+                     may push or stand off, not both. The product λᵢ·penetrationᵢ / (F·U)
+                     is weaker: on a weakly active wall (zero gap, zero force) it passed a
+                     QP answer 1.4e-4 F off (each factor ~1e-4, the product 1e-8)
     sign             max(0, −min λ) / F: how hard a wall pulls   (inequality contact)
 """
 
@@ -88,12 +98,16 @@ def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.
     support_forces = np.zeros(scene.n_nodes)
     support_forces[[s.node for s in scene.supports]] = reactions
     gaps = np.array([w.gap for w in scene.walls], dtype=float)
-    # k·gap, the force that closes the largest gap through the softest element, keeps F
-    # physical when nothing is loaded and every force is round-off
-    closing = float(scene.bar.stiffness.min()) * _norm(gaps)
-    force_scale = max(_norm(loads), _norm(internal), _norm(walls), _norm(support_forces), closing,
-                      _TINY)
-    disp_scale = max(_norm(u), _norm(gaps), force_scale / float(scene.bar.stiffness.max()), _TINY)
+    # What makes forces: the loads, and walls that start past their node (k·|gap|, k the
+    # softest element). Only when neither does (exact answer u = 0, every computed force
+    # round-off) do the gaps set the scales. Open gaps otherwise stay out: a far wall's gap
+    # would make U and F large and hide a wrong force at a near one.
+    k_min, k_max = float(scene.bar.stiffness.min()), float(scene.bar.stiffness.max())
+    source = max(_norm(loads), k_min * float(np.max(-gaps, initial=0.0)))
+    unloaded = _norm(gaps) if source == 0.0 else 0.0
+    force_scale = max(_norm(loads), _norm(internal), _norm(walls), _norm(support_forces), source,
+                      k_min * unloaded, _TINY)
+    disp_scale = max(_norm(u), force_scale / k_max, unloaded, _TINY)
     pen = penetration(scene, u)
     lam = np.asarray(contact_force, dtype=float)
     equilibrium = _norm(np.cumsum(internal - loads - support_forces - walls)) / force_scale
@@ -104,7 +118,11 @@ def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.
                      "complementarity": None, "sign": None}
     else:
         feasibility = max(0.0, float(pen.max(initial=0.0))) / disp_scale
-        complementarity = _norm(lam * pen) / force_scale / disp_scale  # no underflow to 0
+        # the natural residual min(λ/F, gap/U) per wall, not the product λ·gap/(F·U): on a
+        # weakly active wall (gap 0, λ 0) the product accepts λ and gap each ~√tol
+        # (pulling and penetrating are the sign and feasibility residuals, not counted here)
+        complementarity = _norm(np.minimum(np.maximum(lam, 0.0) / force_scale,
+                                           np.maximum(-pen, 0.0) / disp_scale))
         residuals = {"equilibrium": equilibrium, "feasibility": feasibility,
                      "complementarity": complementarity, "sign": pulling}
     failures = [
@@ -144,6 +162,8 @@ class Result:
     residuals, verified, physical, message : the independent check (see :func:`check`).
     status, claimed_success : what the solver itself said, recorded and not trusted.
     time : wall time of the whole solve (s); timings splits it into build and solve.
+    info : what the method reported beyond u and λ (e.g. a QP's scales and the solver's own
+        timings; in the strain formulation ``element_force``, the tie rows' multipliers, N).
     """
 
     scene: Scene
@@ -168,6 +188,7 @@ class Result:
     time: float
     timings: dict[str, float]
     warnings: tuple[str, ...]
+    info: dict[str, Any] = field(default_factory=dict)
 
     @property
     def label(self) -> str:
@@ -186,7 +207,7 @@ class Result:
             "verified": self.verified, "physical": self.physical, "message": self.message,
             "status": self.status, "claimed_success": self.claimed_success,
             "iterations": self.iterations, "time": self.time, "timings": _plain(self.timings),
-            "warnings": list(self.warnings),
+            "warnings": list(self.warnings), "info": _plain(self.info),
         }
 
     def to_json(self, indent: int | None = 2) -> str:
@@ -244,4 +265,5 @@ def make_result(model: Model, solution: Solution, *, method: str, contact: str,
         physical=found.physical, message=found.message, status=solution.status,
         claimed_success=solution.claimed_success, iterations=solution.iterations,
         time=sum(timings.values()), timings=dict(timings), warnings=tuple(warnings),
+        info=dict(solution.info),
     )

@@ -6,6 +6,7 @@ model, times the method, and turns its Solution into a checked Result.
 
 from __future__ import annotations
 
+import functools
 import inspect
 import time
 from collections.abc import Callable
@@ -21,7 +22,7 @@ from contactqp.model import CONTACT_KINDS, build_model, condense, contact_kind
 from contactqp.result import Result, Solution, make_result
 from contactqp.scene import Scene, seed_scene
 
-FORMULATIONS = ("full", "condensed")
+FORMULATIONS = ("full", "condensed", "strain")
 
 METHODS: dict[str, Callable[..., Solution]] = {
     "lagrange": solve_lagrange,
@@ -31,10 +32,17 @@ METHODS: dict[str, Callable[..., Solution]] = {
 }
 
 
+@functools.cache
 def method_options(method: str) -> tuple[str, ...]:
-    """The keyword options a method takes."""
+    """The keyword options a method takes (``formulation`` is :func:`solve`'s own argument)."""
     parameters = inspect.signature(METHODS[method]).parameters.values()
-    return tuple(p.name for p in parameters if p.kind is inspect.Parameter.KEYWORD_ONLY)
+    return tuple(p.name for p in parameters
+                 if p.kind is inspect.Parameter.KEYWORD_ONLY and p.name != "formulation")
+
+
+def takes_strain(method: str) -> bool:
+    """Whether a method solves the strain formulation (it needs exact equality rows)."""
+    return "formulation" in inspect.signature(METHODS[method]).parameters
 
 
 def _validate(method: str, contact: str, options: dict[str, Any]) -> Callable[..., Solution]:
@@ -74,15 +82,24 @@ def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "
     solver, None for the backend's default; accuracy "default" or "high"; scale, default True:
     see :mod:`contactqp.methods.qp`).
 
-    ``formulation``: "full" (every free node an unknown) or "condensed" (K factored once, the
+    ``formulation``: "full" (every free node an unknown), "condensed" (K factored once, the
     method sees only the nodes that carry walls, every displacement recovered from the same
-    factorisation; see :func:`contactqp.model.condense`). Returns a checked :class:`Result`.
+    factorisation; see :func:`contactqp.model.condense`) or "strain" (lagrange and qp only:
+    the element elongations are unknowns too, tied to the displacements by equality rows
+    whose multipliers are the element forces; see :func:`contactqp.model.elongation_rows`).
+    Returns a checked :class:`Result`.
     """
     scene = seed_scene() if scene is None else scene
     function = _validate(method, contact, options)
     if formulation not in FORMULATIONS:
         raise OptionError(f"formulation must be one of {', '.join(FORMULATIONS)}; "
                           f"got {formulation!r}")
+    if formulation == "strain" and not takes_strain(method):
+        raise OptionError(
+            f"formulation='strain' is solved by the methods "
+            f"{', '.join(m for m in METHODS if takes_strain(m))}, not {method!r}: its tie rows "
+            f"must hold exactly, and {method!r} enforces rows by a penalty"
+        )
     if contact == "equality":
         check_equality_is_possible(scene)
     start = time.perf_counter()
@@ -92,6 +109,8 @@ def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "
         condensed = condense(model)
         solution = function(condensed.model, contact, **options)
         solution = replace(solution, u_free=condensed.displacements(solution.contact_force))
+    elif formulation == "strain":
+        solution = function(model, contact, formulation="strain", **options)
     else:
         solution = function(model, contact, **options)
     solved = time.perf_counter()
@@ -101,4 +120,4 @@ def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "
 
 
 __all__ = ["CONTACT_KINDS", "FORMULATIONS", "METHODS", "check_equality_is_possible",
-           "method_options", "solve"]
+           "method_options", "solve", "takes_strain"]

@@ -11,7 +11,7 @@ import numpy as np
 @dataclass(frozen=True)
 class QPOutcome:
     """A backend's answer before the dual sign and the scales are applied: the scaled solution
-    x, the backend's own dual of the contact rows, its status text, whether that status claims
+    x, the backend's own dual of every row of ``QPProblem.rows()`` (tie rows, then contact rows), its status text, whether that status claims
     success, its iteration count and timings (s) in ``info``."""
 
     x: np.ndarray

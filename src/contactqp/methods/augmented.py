@@ -18,7 +18,7 @@ import numpy as np
 from contactqp import linalg
 from contactqp.methods._active_set import active_set_loop
 from contactqp.methods.penalty import penalty_value
-from contactqp.model import Model, stiffness_seen_at
+from contactqp.model import Model, wall_stiffness
 from contactqp.result import Solution
 
 PENALTY_PER_STIFFNESS = 100.0  # default ε: this many times the stiffness the walls see
@@ -27,9 +27,13 @@ DEFAULT_MAX_ITERATIONS = 100
 
 
 def default_penalty(model: Model) -> float:
-    """ε = 100 × the stiffness the walls see (N/m): each update then cuts the force error
-    about a hundredfold, far from the round-off of a penalty that is accurate on its own."""
-    seen = stiffness_seen_at(model, model.C.indices)
+    """ε = 100 × the stiffness the walls see (N/m), :func:`contactqp.model.wall_stiffness`:
+    the largest eigenvalue σ of S⁻¹, S the flexibility between the walled nodes. An update
+    shrinks the force error of each mode by σᵢ/(σᵢ + ε) <= 1/101, and ε stays far from the
+    round-off of a penalty that is accurate on its own (it does not grow with the mesh).
+    Measured: 100 × the stiffness the walls see together (a smaller σ) took 100 updates
+    on two zero-gap walls joined by an element 300 times stiffer than the bar before them."""
+    seen = wall_stiffness(model)
     return PENALTY_PER_STIFFNESS * (1.0 if seen is None else seen)
 
 

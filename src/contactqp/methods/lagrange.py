@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from contactqp import linalg
 from contactqp.methods._active_set import active_set_loop
-from contactqp.model import Model
+from contactqp.errors import OptionError
+from contactqp.model import Model, elongation_rows
 from contactqp.result import Solution
 
 # An active-set decision ignores penetrations and pulls below this fraction of the
@@ -40,19 +42,51 @@ def solve_saddle_point(K: sp.sparray, P: np.ndarray, C: sp.csr_array,
     return x[:n], x[n:]
 
 
-def solve_lagrange(model: Model, contact: str, *, max_iterations: int | None = None) -> Solution:
-    """Lagrange multipliers; ``contact`` "equality" (every wall holds) or "inequality"."""
+def solve_strain_saddle_point(model: Model, active: np.ndarray) -> tuple[np.ndarray, np.ndarray,
+                                                                       np.ndarray]:
+    """The strain formulation's saddle-point system with the walls ``active`` as equalities.
+
+    Unknowns [u; e; N; λ]: displacements, element elongations, and the multipliers of the tie
+    rows B u − e = 0 and of the walls. Stationarity in e gives N = k_e e, so the tie
+    multipliers are the element forces (N). The matrix is ordered by reverse Cuthill–McKee,
+    which makes it banded for a chain. Returns (u, N, λ of the active walls).
+    """
+    B = elongation_rows(model)
+    k = model.scene.bar.stiffness
+    n, m = model.n_free, k.size
+    C = model.C[active]
+    hessian = sp.diags_array(np.concatenate((np.zeros(n), k)))
+    rows = sp.vstack((sp.hstack((B, -sp.eye_array(m))), sp.hstack((C, sp.csr_array((C.shape[0], m))))))
+    matrix = sp.csr_array(sp.block_array([[hessian, rows.T], [rows, None]], format="csr"))
+    rhs = np.concatenate((model.P, np.zeros(2 * m), model.g[active]))
+    order = reverse_cuthill_mckee(matrix, symmetric_mode=True).astype(int)
+    x = linalg.solve(matrix, rhs, order=order)
+    return x[:n], x[n + m:n + 2 * m], x[n + 2 * m:]
+
+
+def solve_lagrange(model: Model, contact: str, *, max_iterations: int | None = None,
+                   formulation: str = "full") -> Solution:
+    """Lagrange multipliers; ``contact`` "equality" (every wall holds) or "inequality";
+    ``formulation`` "full" (unknowns u) or "strain" (u and the element elongations e, tied by
+    equality rows whose multipliers, the element forces, go to the Solution's info)."""
     K, P, C, g = model.K, model.P, model.C, model.g
+    element_force: list[np.ndarray] = []
 
     def step(active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        u, lam_active = solve_saddle_point(K, P, C[active], g[active])
+        if formulation == "strain":
+            u, forces, lam_active = solve_strain_saddle_point(model, active)
+            element_force[:] = [forces]
+        else:
+            u, lam_active = solve_saddle_point(K, P, C[active], g[active])
         lam = np.zeros(model.n_walls)
         lam[active] = lam_active
         return u, lam
 
+    if formulation not in ("full", "strain"):
+        raise OptionError(f"lagrange formulation must be 'full' or 'strain'; got {formulation!r}")
     if contact == "equality":
         u, lam = step(np.ones(model.n_walls, dtype=bool))
-        return Solution(u, lam, solver="lagrange")
+        return Solution(u, lam, solver="lagrange", info=_strain_info(element_force))
 
     def update(active: np.ndarray, u: np.ndarray, lam: np.ndarray) -> np.ndarray:
         pen = C @ u - g
@@ -64,4 +98,9 @@ def solve_lagrange(model: Model, contact: str, *, max_iterations: int | None = N
 
     u, lam, iterations = active_set_loop(model.n_walls, step, update, method="lagrange",
                                          max_iterations=max_iterations)
-    return Solution(u, lam, solver="lagrange", iterations=iterations)
+    return Solution(u, lam, solver="lagrange", iterations=iterations,
+                    info=_strain_info(element_force))
+
+
+def _strain_info(element_force: list[np.ndarray]) -> dict:
+    return {"element_force": element_force[0]} if element_force else {}

@@ -11,9 +11,9 @@ units of F: λ = F·μ. The convention is the model's: L = Π + λᵀ(C D − g)
 which a wall pushes the bar. With ``scale=False``, U = 1 m and F = 1 N (the QP in SI units).
 
 Scaling (:func:`scales`): k is the stiffness the loaded and walled nodes see together,
-1 / ‖K⁻¹e‖∞ with e = 1 at those nodes; U = max(largest gap, ‖K⁻¹P‖∞), the larger of the gaps
-and the displacement the loads cause without walls (both from one banded factorisation);
-F = k·U. Then q̂, ĝ and the expected multipliers are O(1), and k depends only on where loads
+1 / ‖K⁻¹e‖∞ with e = 1 at those nodes; U = max(‖K⁻¹P‖∞, largest −gap), the displacement the
+loads cause without walls or the largest initial penetration (both from one banded
+factorisation; the gaps only when nothing loads the bar); F = k·U. Then q̂, ĝ and the expected multipliers are O(1), and k depends only on where loads
 and walls are, so a new load or gap changes q̂ and ĝ alone (the cvxpy backend re-solves
 without re-canonicalising).
 
@@ -53,7 +53,7 @@ import scipy.sparse as sp
 
 from contactqp.errors import ContactqpError, OptionError, SolverNotAvailable
 from contactqp.methods._qp_outcome import QPOutcome, failed_outcome
-from contactqp.model import Model, build_model, contact_kind
+from contactqp.model import Model, build_model, contact_kind, elongation_rows
 from contactqp.result import Solution
 from contactqp.scene import Scene
 
@@ -79,6 +79,9 @@ class QPProblem:
     displacement_scale : U (m): the displacements are D = U·x.
     force_scale : F (N): the contact forces are λ = F·μ, μ the multipliers of the scaled QP
         with the convention L = ½ xᵀKx + qᵀx + μᵀ(C x − g).
+    ties : the strain formulation's tie rows T x = 0 (B u − e = 0: each element's elongation
+        e tied to the displacements u), or None. Then x = [u; e], K = diag(0, k_e / k) and
+        the multipliers of the tie rows are the element forces in units of F.
     """
 
     K: sp.csc_array
@@ -88,6 +91,28 @@ class QPProblem:
     contact: str
     displacement_scale: float = 1.0
     force_scale: float = 1.0
+    ties: sp.csc_array | None = None
+
+    @property
+    def n_ties(self) -> int:
+        """Number of tie rows (0 unless the strain formulation)."""
+        return 0 if self.ties is None else int(self.ties.shape[0])
+
+    @property
+    def n_displacements(self) -> int:
+        """Number of displacement unknowns: the first entries of x."""
+        return self.n - self.n_ties
+
+    def rows(self) -> sp.csc_array:
+        """Every constraint row, the tie rows (= 0) first, then the contact rows (C x <= g or
+        = g): what solvers that take one row matrix are given."""
+        if self.ties is None:
+            return self.C
+        return sp.csc_array(sp.vstack((self.ties, self.C), format="csc"))
+
+    def rows_rhs(self) -> np.ndarray:
+        """The right-hand sides of :meth:`rows`: zero for the ties, then g."""
+        return np.concatenate((np.zeros(self.n_ties), self.g))
 
     @cached_property
     def K_upper(self) -> sp.csc_array:
@@ -112,7 +137,7 @@ class QPProblem:
     def to_si(self, x: np.ndarray, multipliers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(free-node displacements in m, contact forces in N) from the scaled solution x and
         the multipliers μ of the rows (convention above: μ >= 0 when a wall pushes)."""
-        x = np.asarray(x, dtype=float).reshape(-1)
+        x = np.asarray(x, dtype=float).reshape(-1)[: self.n_displacements]
         mu = np.asarray(multipliers, dtype=float).reshape(-1)
         return self.displacement_scale * x, self.force_scale * mu
 
@@ -127,10 +152,12 @@ def scales(model: Model) -> tuple[float, float]:
     """(U in m, F in N): the displacement and force scales of a model (module docstring).
 
     k = 1 / ‖K⁻¹e‖∞, e = 1 at every loaded or walled free node: the stiffness of the bar as
-    the loads and walls see it, from the scene's structure alone. U = max(largest gap,
-    ‖K⁻¹P‖∞), the larger of the gaps and the free (wall-less) displacement; F = k·U. Both
-    right-hand sides go through one banded Cholesky factorisation. Without loads or walls k
-    falls back to the largest diagonal of K; without loads and gaps U is 1 m (u = 0 then).
+    the loads and walls see it, from the scene's structure alone. U = max(‖K⁻¹P‖∞, largest
+    −gap): the free (wall-less) displacement, or how far a wall starts past its node; F = k·U.
+    Contact forces are then O(F): a wall with an open gap can only take what the loads bring.
+    Both right-hand sides go through one banded Cholesky factorisation. Without loads or walls
+    k falls back to the largest diagonal of K; without loads or penetrations (u = 0 then) U is
+    the largest gap, or 1 m.
     """
     e = np.zeros(model.n_free)
     e[np.flatnonzero(model.P)] = 1.0
@@ -140,9 +167,13 @@ def scales(model: Model) -> tuple[float, float]:
         k = 1.0 / float(np.abs(solved[:, 0]).max())
     else:
         k = float(model.K.diagonal().max())
-    U = max(float(np.abs(model.g).max(initial=0.0)), float(np.abs(solved[:, 1]).max()))
-    if not U > 0.0:
-        U = 1.0
+    # what moves the bar: the loads, and walls that start past their node (gap < 0). Open gaps
+    # are not a scale: a far wall's gap would shrink the loads to below the solver's tolerance
+    # (measured: Clarabel "Solved" with 81 N on a 1 N load pulling away from a zero-gap wall,
+    # U set by a second wall 0.19 mm away)
+    U = max(float(np.abs(solved[:, 1]).max(initial=0.0)), float(np.max(-model.g, initial=0.0)))
+    if not U > 0.0:  # nothing loads the bar: u = 0, λ = 0; any U will do, the gaps if any
+        U = float(np.abs(model.g).max(initial=0.0)) or 1.0
     return U, k * U
 
 
@@ -152,15 +183,39 @@ def _scale_option(scale: Any) -> bool:
     return bool(scale)
 
 
-def qp_from_model(model: Model, contact: str = "inequality", scale: bool = True) -> QPProblem:
-    """The QP data of a model (see :class:`QPProblem`), scaled by :func:`scales` or in SI."""
+def qp_from_model(model: Model, contact: str = "inequality", scale: bool = True,
+                  formulation: str = "full") -> QPProblem:
+    """The QP data of a model (see :class:`QPProblem`), scaled by :func:`scales` or in SI;
+    ``formulation`` "full" (x = u, Hessian K) or "strain" (x = [u; e], Hessian diag(0, k_e),
+    tie rows B u − e = 0)."""
     contact_kind(contact)
     U, F = scales(model) if _scale_option(scale) else (1.0, 1.0)
+    if formulation == "strain":
+        return _strain_qp(model, contact, U, F)
+    if formulation != "full":
+        raise OptionError(f"QP formulation must be 'full' or 'strain'; got {formulation!r}")
     band = model.K_band
     K = _csc_from_band(band / (F / U)) if band is not None else sp.csc_array(model.K / (F / U))
     return QPProblem(
         K=K, q=-model.P / F, C=sp.csc_array(model.C), g=model.g / U, contact=contact,
         displacement_scale=U, force_scale=F,
+    )
+
+
+def _strain_qp(model: Model, contact: str, U: float, F: float) -> QPProblem:
+    """The strain formulation: unknowns x = [u; e] (both in units of U), energy
+    ½ Σ k_e e² (k_e = EA/L of each element), tie rows B u − e = 0 (:func:`elongation_rows`).
+    The Hessian is diagonal; the bar's ill-conditioning (cond K ~ n²) moves into the rows."""
+    B = elongation_rows(model)
+    k = model.scene.bar.stiffness / (F / U)
+    n, m = model.n_free, k.size
+    identity = sp.eye_array(m, format="csc")
+    return QPProblem(
+        K=sp.csc_array(sp.diags_array(np.concatenate((np.zeros(n), k))).tocsc()),
+        q=np.concatenate((-model.P / F, np.zeros(m))),
+        C=sp.csc_array(sp.hstack((model.C, sp.csr_array((model.n_walls, m))), format="csc")),
+        g=model.g / U, contact=contact, displacement_scale=U, force_scale=F,
+        ties=sp.csc_array(sp.hstack((B, -identity), format="csc")),
     )
 
 
@@ -177,15 +232,18 @@ def _csc_from_band(band: np.ndarray) -> sp.csc_array:
     return sp.csc_array((data[keep], rows[keep], indptr), shape=(n, n))
 
 
-def qp_problem(scene: Scene, contact: str = "inequality", scale: bool = True) -> QPProblem:
+def qp_problem(scene: Scene, contact: str = "inequality", scale: bool = True,
+               formulation: str = "full") -> QPProblem:
     """The QP of a scene, ready for any solver: minimise ½ xᵀKx + qᵀx s.t. C x <= g (or = g).
 
     With ``scale=True`` (the default, as for ``solve(method="qp")``) the data are
     non-dimensional; :meth:`QPProblem.to_si` maps a solution and its multipliers back to metres
     and newtons. With ``scale=False`` they are in SI units (K in N/m, q in N, g in m). A
     solver's own equilibration may be better off on the scaled data (see :data:`PRESCALED`).
+    ``formulation="strain"`` gives the QP in displacements and element elongations
+    (:func:`_strain_qp`).
     """
-    return qp_from_model(build_model(scene), contact, scale)
+    return qp_from_model(build_model(scene), contact, scale, formulation)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -225,7 +283,7 @@ ACCURACY: dict[str, dict[str, dict[str, Any]]] = {
     },
     "cvxopt": {
         "default": {"abstol": 1e-7, "reltol": 1e-6, "feastol": 1e-7},
-        "high": {"abstol": 1e-9, "reltol": 1e-9, "feastol": 1e-9},
+        "high": {"abstol": 1e-8, "reltol": 1e-8, "feastol": 1e-8},
     },
     "piqp": {
         "default": {"eps_abs": 1e-8, "eps_rel": 1e-9},
@@ -281,7 +339,7 @@ def accuracy_settings(solver: str, accuracy: str, scaled: bool = False) -> dict[
                    max_iter; polishing                          4000; on               1e5; on
         scs        eps_abs, eps_rel; max_iters                  1e-4; 1e5              1e-9; 1e5
         ecos       abstol, reltol, feastol                      1e-8                   1e-10
-        cvxopt     abstol, reltol, feastol                      1e-7, 1e-6, 1e-7       1e-9 (a)
+        cvxopt     abstol, reltol, feastol                      1e-7, 1e-6, 1e-7       1e-8 (a)
         piqp       eps_abs, eps_rel                             1e-8, 1e-9             1e-10, 1e-11
         proxqp     eps_abs (eps_rel 0)                          1e-5                   1e-10
                    duality gap checked, eps_duality_gap_abs     off                    1e-10 (b)
@@ -293,7 +351,8 @@ def accuracy_settings(solver: str, accuracy: str, scaled: bool = False) -> dict[
         other      the solver's defaults for both
         =========  ==========================================  ===================  ============
 
-    (a) cvxpy hands CVXOPT a cone rewrite of the QP, and CVXOPT fails there at 1e-10 (measured).
+    (a) cvxpy hands CVXOPT a cone rewrite of the QP, and CVXOPT fails there at 1e-9 on a
+        six-element bar with four walls (measured).
     (b) Without the duality-gap test ProxQP stopped 2e-6 off in λ at eps_abs 1e-10 (measured);
         cvxpy passes only eps_abs and eps_rel on to ProxQP, so through cvxpy the gap is unchecked.
     (c) HiGHS regularises the Hessian by 1e-7 by default, which leaves ~1e-7 in λ (measured).
@@ -440,34 +499,40 @@ def guarded(solve: Any, qp: QPProblem, *args: Any) -> QPOutcome:
     except (KeyboardInterrupt, SystemExit, ContactqpError):
         raise
     except BaseException as error:  # noqa: BLE001 - Rust solvers panic with a BaseException
-        return failed_outcome(qp.n, qp.g.size, f"raised {type(error).__name__}: {error}")
+        return failed_outcome(qp.n, qp.g.size + qp.n_ties, f"raised {type(error).__name__}: {error}")
 
 
 def solve_qp(model: Model, contact: str, *, backend: str = DEFAULT_BACKEND,
              solver: str | None = None, accuracy: str = "default",
-             scale: bool = DEFAULT_SCALE) -> Solution:
+             scale: bool = DEFAULT_SCALE, formulation: str = "full") -> Solution:
     """Solve the contact problem as a QP with ``backend`` ("clarabel", "osqp", "cvxpy",
     "qpsolvers") and ``solver`` (a name the backend knows; None: its default), at
-    ``accuracy`` "default" or "high" (:func:`accuracy_settings`), scaled or in SI (``scale``)."""
+    ``accuracy`` "default" or "high" (:func:`accuracy_settings`), scaled or in SI (``scale``),
+    as the QP in displacements (``formulation="full"``) or with element elongations
+    ("strain"; the tie rows' multipliers, the element forces in N, go to ``info``)."""
     module, name = resolve_solver(backend, solver)
     settings = accuracy_settings(name, accuracy, scaled=_scale_option(scale))
     start = time.perf_counter()
-    qp = qp_from_model(model, contact, scale)
+    qp = qp_from_model(model, contact, scale, formulation)
     built = time.perf_counter()
     label = backend if name == backend else f"{backend}/{name}"
     if (backend, name) in DENSE_SOLVERS and qp.n > DENSE_LIMIT:
         outcome = failed_outcome(
-            qp.n, qp.g.size,
+            qp.n, qp.g.size + qp.n_ties,
             f"not attempted: {name} works on dense matrices and the bar has {qp.n} unknowns "
             f"(limit {DENSE_LIMIT})",
         )
     else:
         outcome = guarded(module.solve, qp, name, settings)
     sign = DUAL_SIGNS[backend][contact]
-    u_free, contact_force = qp.to_si(outcome.x, sign * np.asarray(outcome.dual, dtype=float))
+    dual = sign * np.asarray(outcome.dual, dtype=float)  # of qp.rows(): the ties, then the walls
+    u_free, contact_force = qp.to_si(outcome.x, dual[qp.n_ties:])
     info = {"backend": backend, "solver": name, "accuracy": accuracy, "scale": bool(scale),
+            "qp_unknowns": qp.n,
             "displacement_scale": qp.displacement_scale, "force_scale": qp.force_scale,
             "time_qp_data": built - start, **outcome.info}
+    if qp.ties is not None:
+        info["element_force"] = qp.force_scale * dual[: qp.n_ties]
     return Solution(u_free, contact_force, solver=label, iterations=int(outcome.iterations),
                     status=outcome.status, claimed_success=bool(outcome.claimed_success),
                     info=info)

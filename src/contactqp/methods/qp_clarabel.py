@@ -1,7 +1,7 @@
 """QP backend: Clarabel's own Python interface (an interior-point conic solver).
 
 The rows go in as A x + s = b with s in the nonnegative cone (inequality) or the zero cone
-(equality); z is the dual of those rows, and Clarabel's KKT condition is P x + q + Aᵀz = 0.
+(equality, and the strain formulation's tie rows); z is the dual of those rows, and Clarabel's KKT condition is P x + q + Aᵀz = 0.
 """
 
 from __future__ import annotations
@@ -36,18 +36,18 @@ def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
     options.verbose = False
     for key, value in settings.items():
         setattr(options, key, value)
-    m = qp.g.size
-    cone = clarabel.NonnegativeConeT(m) if qp.contact == "inequality" else clarabel.ZeroConeT(m)
-    engine = clarabel.DefaultSolver(
-        qp.K_upper, qp.q, qp.C, qp.g,
-        [cone] if m else [], options,
-    )
+    m, ties = qp.g.size, qp.n_ties
+    cones = [clarabel.ZeroConeT(ties)] if ties else []
+    if m:
+        cones.append(clarabel.NonnegativeConeT(m) if qp.contact == "inequality"
+                     else clarabel.ZeroConeT(m))
+    engine = clarabel.DefaultSolver(qp.K_upper, qp.q, qp.rows(), qp.rows_rhs(), cones, options)
     setup = time.perf_counter()
     found = engine.solve()
     solved = time.perf_counter()
     status = str(found.status)
     return QPOutcome(
-        vector_or_nan(found.x, qp.n), vector_or_nan(found.z, m), status,
+        vector_or_nan(found.x, qp.n), vector_or_nan(found.z, m + ties), status,
         claimed_success=status == "Solved", iterations=int(found.iterations),
         info={"time_setup": setup - start, "time_solve": solved - setup},
     )

@@ -18,6 +18,7 @@ Facts (cvxpy 1.9.3) that shape it:
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import time
 import warnings
@@ -61,7 +62,9 @@ def takes_qp(name: str) -> bool:
     )
 
 
+@functools.cache
 def installed_solvers() -> tuple[str, ...]:
+    # cached: cvxpy looks for every solver's module on each call (milliseconds of imports)
     return tuple(name for name in cp.installed_solvers() if takes_qp(name))
 
 
@@ -79,6 +82,7 @@ class Structure:
     loads: cp.Parameter | None
     gaps: cp.Parameter | None
     rows: cp.Constraint | None
+    tie_rows: cp.Constraint | None = None
 
 
 _CACHE: OrderedDict[bytes, Structure] = OrderedDict()
@@ -86,29 +90,36 @@ _CACHE: OrderedDict[bytes, Structure] = OrderedDict()
 
 def _key(qp: QPProblem, loaded: np.ndarray) -> bytes:
     digest = hashlib.sha256(qp.contact.encode())
+    ties = qp.ties if qp.ties is not None else sp.csc_array((0, qp.n))
     for array in (np.array(qp.K.shape), qp.K.indptr, qp.K.indices, qp.K.data,
-                  qp.C.indptr, qp.C.indices, qp.C.data, loaded):
+                  qp.C.indptr, qp.C.indices, qp.C.data, ties.indptr, ties.indices, ties.data,
+                  loaded):
         digest.update(np.ascontiguousarray(array).tobytes())
         digest.update(b"|")
     return digest.digest()
 
 
-def build_structure(K: sp.sparray, C: sp.sparray, loaded: np.ndarray, contact: str) -> Structure:
-    """The DPP problem of a structure: parameters for the loads at ``loaded`` and the gaps."""
+def build_structure(K: sp.sparray, C: sp.sparray, loaded: np.ndarray, contact: str,
+                    ties: sp.sparray | None = None) -> Structure:
+    """The DPP problem of a structure: parameters for the loads at ``loaded`` and the gaps;
+    the strain formulation's ``ties`` are constant rows ``T @ x == 0``."""
     x = cp.Variable(K.shape[0])
     objective = 0.5 * cp.quad_form(x, cp.psd_wrap(sp.csc_matrix(K)))
-    loads = gaps = rows = None
+    loads = gaps = rows = tie_rows = None
     if loaded.size:
         loads = cp.Parameter(loaded.size)
         objective = objective + loads @ x[loaded]
     constraints = []
+    if ties is not None:
+        tie_rows = sp.csr_matrix(ties) @ x == 0
+        constraints.append(tie_rows)
     if C.shape[0]:
         gaps = cp.Parameter(C.shape[0])
         Cx = sp.csr_matrix(C) @ x
         rows = Cx <= gaps if contact == "inequality" else Cx == gaps
         constraints.append(rows)
     problem = cp.Problem(cp.Minimize(objective), constraints)
-    return Structure(problem, x, loaded, loads, gaps, rows)
+    return Structure(problem, x, loaded, loads, gaps, rows, tie_rows)
 
 
 def structure(qp: QPProblem) -> tuple[Structure, bool]:
@@ -118,7 +129,7 @@ def structure(qp: QPProblem) -> tuple[Structure, bool]:
     if key in _CACHE:
         _CACHE.move_to_end(key)
         return _CACHE[key], True
-    built = build_structure(qp.K, qp.C, loaded, qp.contact)
+    built = build_structure(qp.K, qp.C, loaded, qp.contact, qp.ties)
     _CACHE[key] = built
     while len(_CACHE) > CACHE_SIZE:
         _CACHE.popitem(last=False)
@@ -145,9 +156,11 @@ def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
     solved = time.perf_counter()
     stats = cached.problem.solver_stats
     status = str(cached.problem.status)
-    dual = cached.rows.dual_value if cached.rows is not None else np.zeros(0)
+    parts = [(cached.tie_rows, qp.n_ties), (cached.rows, qp.g.size)]
+    dual = np.concatenate([np.zeros(0)] + [vector_or_nan(row.dual_value, size)
+                                           for row, size in parts if size])
     return QPOutcome(
-        vector_or_nan(cached.x.value, qp.n), vector_or_nan(dual, qp.g.size), status,
+        vector_or_nan(cached.x.value, qp.n), dual, status,
         claimed_success=status == cp.OPTIMAL, iterations=int(stats.num_iters or 0),
         info={"time_setup": (ready - start) + (cached.problem.compilation_time or 0.0),
               "time_solve": (solved - ready) - (cached.problem.compilation_time or 0.0),

@@ -1,6 +1,7 @@
 """QP backend: OSQP's own Python interface (1.x API; ADMM, first order).
 
-The rows go in as l <= A x <= u with l = −∞ (inequality) or l = u (equality); y is their dual,
+The rows go in as l <= A x <= u with l = −∞ (inequality) or l = u (equality, and the strain
+formulation's tie rows); y is their dual,
 and OSQP's KKT condition is P x + q + Aᵀy = 0 (y > 0 where the upper bound holds).
 """
 
@@ -35,16 +36,19 @@ def canonical(solver: str) -> str:
 def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
     """Solve ``qp`` with OSQP; ``settings`` are OSQP settings (eps_abs, polishing, ...)."""
     start = time.perf_counter()
-    lower = np.full(qp.g.size, -np.inf) if qp.contact == "inequality" else qp.g
+    upper = qp.rows_rhs()
+    lower = upper.copy()
+    if qp.contact == "inequality":
+        lower[qp.n_ties:] = -np.inf
     engine = osqp.OSQP()
-    engine.setup(sp.csc_matrix(qp.K_upper), qp.q, sp.csc_matrix(qp.C), lower,
-                 qp.g, verbose=False, **settings)
+    engine.setup(sp.csc_matrix(qp.K_upper), qp.q, sp.csc_matrix(qp.rows()), lower,
+                 upper, verbose=False, **settings)
     setup = time.perf_counter()
     found = engine.solve(raise_error=False)
     solved = time.perf_counter()
     status = str(found.info.status)
     return QPOutcome(
-        vector_or_nan(found.x, qp.n), vector_or_nan(found.y, qp.g.size), status,
+        vector_or_nan(found.x, qp.n), vector_or_nan(found.y, upper.size), status,
         claimed_success=status == SOLVED, iterations=int(found.info.iter),
         info={"time_setup": setup - start, "time_solve": solved - setup,
               "polish_status": int(found.info.status_polish)},

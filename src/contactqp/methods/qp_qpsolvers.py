@@ -1,6 +1,7 @@
 """QP backend: qpsolvers, one front end to many solvers (``qpsolvers.available_solvers``).
 
-The rows go in as G x <= h (inequality, dual z >= 0) or A x = b (equality, dual y); qpsolvers'
+The rows go in as G x <= h (inequality, dual z >= 0) or A x = b (equality and the strain
+formulation's tie rows, dual y); qpsolvers'
 KKT condition is P x + q + Gᵀz + Aᵀy = 0. Its Solution says ``found``; that is the claim.
 """
 
@@ -53,24 +54,36 @@ def _status(found: qpsolvers.Solution) -> str:
 def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
     """Solve ``qp`` with qpsolvers' ``solver``; ``settings`` go to that solver as keywords."""
     start = time.perf_counter()
-    K, C = sp.csc_matrix(qp.K), sp.csc_matrix(qp.C)
+    inequality = qp.contact == "inequality"
+    if inequality:  # walls in G x <= h, tie rows (if any) in A x = 0
+        G, h = qp.C, qp.g
+        A, b = (qp.ties, np.zeros(qp.n_ties)) if qp.ties is not None else (None, None)
+    else:  # ties and walls together in A x = b
+        G, h, A, b = None, None, qp.rows(), qp.rows_rhs()
+    K, G, A = (None if M is None else sp.csc_matrix(M) for M in (qp.K, G, A))
     if solver in DENSE_INPUT:
-        K, C = K.toarray(), C.toarray()
-    if qp.contact == "inequality":
-        problem = qpsolvers.Problem(K, qp.q, G=C, h=qp.g)
-    else:
-        problem = qpsolvers.Problem(K, qp.q, A=C, b=qp.g)
+        K, G, A = (None if M is None else M.toarray() for M in (K, G, A))
+    problem = qpsolvers.Problem(K, qp.q, G=G, h=h, A=A, b=b)
     setup = time.perf_counter()
     options = {**FIXED_SETTINGS.get(solver, {}), **settings}
     found = qpsolvers.solve_problem(problem, solver=solver, verbose=False, **options)
     solved = time.perf_counter()
-    dual = found.z if qp.contact == "inequality" else found.y
+    # qp.rows() order: ties (in A) then walls (in G for inequality, after the ties in A else)
+    dual = np.concatenate((_part(found.y, qp.n_ties), _part(found.z, qp.g.size))) if inequality \
+        else found.y
     iterations = _iterations(found.extras or {})
     return QPOutcome(
-        vector_or_nan(found.x, qp.n), vector_or_nan(dual, qp.g.size), _status(found),
+        vector_or_nan(found.x, qp.n), vector_or_nan(dual, qp.n_ties + qp.g.size), _status(found),
         claimed_success=bool(found.found), iterations=iterations,
         info={"time_setup": setup - start, "time_solve": solved - setup},
     )
+
+
+def _part(values: Any, size: int) -> np.ndarray:
+    """A dual vector of ``size`` entries (empty when size is 0, NaNs when the solver gave none)."""
+    if size == 0:
+        return np.zeros(0)
+    return vector_or_nan(values, size)
 
 
 def _iterations(extras: dict[str, Any]) -> int:
