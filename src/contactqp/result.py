@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from contactqp.model import Model, element_forces, internal_forces, penetration, wall_forces
+from contactqp.model import Model, element_forces, penetration
 from contactqp.scene import Scene
 
 _TINY = 1e-300
@@ -88,29 +88,47 @@ class Check:
     message: str
 
 
+def external_forces(scene: Scene, contact_force: np.ndarray,
+                    reactions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(node, force in +x, N) of every force on the bar from outside: the loads, the walls'
+    −sign·λ and the supports' reactions, one entry each (a node may repeat)."""
+    walls = scene.walls
+    nodes = np.array([p.node for p in scene.loads] + [w.node for w in walls]
+                     + [s.node for s in scene.supports], dtype=np.intp)
+    signs = np.array([w.sign for w in walls], dtype=float)
+    forces = np.concatenate((np.array([p.force for p in scene.loads], dtype=float),
+                             -signs * np.asarray(contact_force, dtype=float).reshape(-1),
+                             np.asarray(reactions, dtype=float).reshape(-1)))
+    return nodes, forces
+
+
 def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.ndarray,
-          contact: str, tolerances: Tolerances = TOLERANCES) -> Check:
+          contact: str, tolerances: Tolerances = TOLERANCES,
+          element_force: np.ndarray | None = None) -> Check:
     """Check displacements (m, every node) and forces (N) against the scene, independently of
-    how they were found. ``contact`` is "inequality" or "equality"."""
-    loads = scene.nodal_loads()
-    internal = internal_forces(scene.bar, u)
-    walls = wall_forces(scene, contact_force)
-    support_forces = np.zeros(scene.n_nodes)
-    support_forces[[s.node for s in scene.supports]] = reactions
+    how they were found. ``contact`` is "inequality" or "equality". ``element_force``: the
+    element forces k_e·(u_(e+1) − u_e) when the caller has them already (else computed)."""
+    forces = element_forces(scene.bar, u) if element_force is None else element_force
+    nodes, external = external_forces(scene, contact_force, reactions)
+    load_scale = _norm(external[: len(scene.loads)])
     gaps = np.array([w.gap for w in scene.walls], dtype=float)
     # What makes forces: the loads, and walls that start past their node (k·|gap|, k the
     # softest element). Only when neither does (exact answer u = 0, every computed force
     # round-off) do the gaps set the scales. Open gaps otherwise stay out: a far wall's gap
     # would make U and F large and hide a wrong force at a near one.
     k_min, k_max = float(scene.bar.stiffness.min()), float(scene.bar.stiffness.max())
-    source = max(_norm(loads), k_min * float(np.max(-gaps, initial=0.0)))
+    source = max(load_scale, k_min * float(np.max(-gaps, initial=0.0)))
     unloaded = _norm(gaps) if source == 0.0 else 0.0
-    force_scale = max(_norm(loads), _norm(internal), _norm(walls), _norm(support_forces), source,
-                      k_min * unloaded, _TINY)
+    force_scale = max(_norm(external), _norm(forces), source, k_min * unloaded, _TINY)
     disp_scale = max(_norm(u), force_scale / k_max, unloaded, _TINY)
-    pen = penetration(scene, u)
+    # section equilibrium: cutting element j leaves nodes 0..j, held by the outside forces on
+    # them and the element's pull N_j; past the last node the cut is the whole bar's balance
+    section = np.bincount(nodes, weights=external, minlength=scene.n_nodes)
+    np.cumsum(section, out=section)
+    section[:-1] += forces
+    equilibrium = _norm(section) / force_scale
     lam = np.asarray(contact_force, dtype=float)
-    equilibrium = _norm(np.cumsum(internal - loads - support_forces - walls)) / force_scale
+    pen = penetration(scene, u)
     pulling = float(np.max(-lam, initial=0.0)) / force_scale  # NaN stays NaN: not physical
     if contact == "equality":
         feasibility = _norm(pen) / disp_scale
@@ -229,6 +247,17 @@ def _plain(value: Any) -> Any:
     return value
 
 
+def _support_reaction(scene: Scene, forces: np.ndarray, contact_force: np.ndarray,
+                      node: int) -> float:
+    """The force (N, +x) a support at ``node`` applies: what node equilibrium leaves over from
+    the elements on either side, the loads and the walls there."""
+    right = forces[node] if node < forces.size else 0.0
+    left = forces[node - 1] if node > 0 else 0.0
+    loads = sum(p.force for p in scene.loads if p.node == node)
+    walls = sum(-w.sign * f for w, f in zip(scene.walls, contact_force) if w.node == node)
+    return float(left - right - loads - walls)
+
+
 def make_result(model: Model, solution: Solution, *, method: str, contact: str,
                 options: dict[str, Any], timings: dict[str, float],
                 tolerances: Tolerances = TOLERANCES) -> Result:
@@ -236,17 +265,14 @@ def make_result(model: Model, solution: Solution, *, method: str, contact: str,
     scene = model.scene
     u = model.full_displacements(np.asarray(solution.u_free, dtype=float))
     lam = np.asarray(solution.contact_force, dtype=float).reshape(-1)
-    supports = np.array([s.node for s in scene.supports], dtype=int)
     forces = element_forces(scene.bar, u)
     # reactions are what equilibrium at the supports needs (the force of the elements on each
-    # side, less loads and walls there); the check then tests the free nodes
-    padded = np.concatenate(([0.0], forces, [0.0]))
-    reactions = (padded[supports] - padded[supports + 1]
-                 - scene.nodal_loads()[supports] - wall_forces(scene, lam)[supports])
+    # side, less loads and walls there); the check then tests every section of the bar
+    reactions = np.array([_support_reaction(scene, forces, lam, s.node) for s in scene.supports])
     stress = forces / scene.bar.areas
     yield_stress = scene.bar.yield_stress
     ratio = None if yield_stress is None else float(np.abs(stress).max() / yield_stress)
-    found = check(scene, u, lam, reactions, contact, tolerances)
+    found = check(scene, u, lam, reactions, contact, tolerances, element_force=forces)
     warnings: list[str] = []
     if ratio is not None and ratio > 1.0:
         e = int(np.abs(stress).argmax())
