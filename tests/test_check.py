@@ -15,9 +15,12 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import contactqp
 from contactqp import TOLERANCES, Bar, Load, Scene, Support, Tolerances, Wall
+from contactqp.result import section_residual
 
 GAP = 1.5e-4  # m
 U_CONTACT = [0.0, 5e-5, 1.5e-4]  # m: 10 kN through k_0 = 2e8 N/m, then through k_1 = 1e8 N/m
@@ -180,3 +183,21 @@ def test_result_to_json(method, contact):
         assert data["residuals"]["complementarity"] is None
     assert isinstance(data["time"], float) and data["time"] >= 0.0
     assert data == result.to_dict()
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(2, 12).flatmap(lambda n: st.tuples(
+    st.just(n),
+    st.lists(st.floats(-1e3, 1e3), min_size=n - 1, max_size=n - 1),
+    st.lists(st.tuples(st.integers(0, n - 1), st.floats(-1e3, 1e3)), min_size=1, max_size=6))))
+def test_section_residual_is_the_largest_cut(case):
+    """Against the definition: cut j leaves nodes 0..j; residual N_j + Σ outside forces there
+    (a dense cumulative sum here), and past the last node the whole bar's balance."""
+    n, forces, outside = case
+    nodes = np.array([node for node, _ in outside])
+    values = np.array([value for _, value in outside])
+    sections = np.cumsum(np.bincount(nodes, weights=values, minlength=n))
+    sections[:-1] += forces
+    expected = np.abs(sections).max()
+    assert section_residual(np.array(forces), nodes, values) == pytest.approx(
+        expected, rel=1e-12, abs=1e-9)

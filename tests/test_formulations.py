@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 import contactqp
 from contactqp.methods import qp as qpmod
-from contactqp.model import build_model, condense, elongation_rows, element_forces, wall_forces
+from contactqp.model import build_model, condense, element_forces, elongation_rows, wall_forces
 from test_qp import PAIRS, SCENES, SOC_REWRITE, force_rtol, require
 
 METHODS = [("lagrange", {}), ("augmented", {}), ("qp", {"backend": "clarabel", "accuracy": "high"}),
@@ -223,3 +223,41 @@ def test_strain_with_a_penalty_method_is_refused(method):
 def test_unknown_qp_formulation_names_the_value():
     with pytest.raises(contactqp.OptionError, match="'weak'"):
         qpmod.qp_from_model(build_model(contactqp.seed_scene()), formulation="weak")
+
+
+# ---------------------------------------------------------------------------------------------
+# A chain held by one support: K⁻¹ by statics
+
+
+@pytest.mark.parametrize("support", [0, 3, 7])
+@pytest.mark.parametrize("columns", [1, 3, 40])
+def test_determinate_chain_solve_is_the_inverse_of_K(support, columns):
+    """K⁻¹ from statics (the Green's function for a few loaded rows, cumulative sums for
+    many) against a dense solve with the assembled K: κ(K) <= ~1e3 here, so 1e-12."""
+    rng = np.random.default_rng(support + columns)
+    bar = contactqp.Bar.from_areas(rng.uniform(1e-4, 1e-3, 40), 2e11, length=2.0)
+    scene = contactqp.Scene(bar, (contactqp.Support(support),), (), ())
+    model = build_model(scene)
+    rhs = np.zeros((model.n_free, columns))
+    rows = rng.choice(model.n_free, size=min(columns, model.n_free), replace=False)
+    rhs[rows, np.arange(rows.size) % columns] = rng.normal(size=rows.size)
+    if columns == 40:
+        rhs = rng.normal(size=rhs.shape)  # every row loaded: the cumulative-sum path
+    expected = np.linalg.solve(model.K.toarray(), rhs)
+    np.testing.assert_allclose(model.solve_K(rhs), expected, rtol=0,
+                               atol=1e-12 * np.abs(expected).max())
+
+
+def test_a_million_element_bar_is_exact_to_round_off():
+    """Exact areas: the discrete tip flexibility is the cone's ∫dx/(EA), so the condensed
+    contact force equals the continuum closed form up to round-off. Assembling K and
+    factoring it (two supports' path) loses ~3e-8 here; statics loses ~n·ε."""
+    from contactqp.studies import cone_contact_force
+    n = 200_000
+    bar = contactqp.Bar.tapered_circle(1.0, n, 0.040, 0.020, 210e9, area_rule="exact")
+    seed = contactqp.seed_scene()
+    scene = contactqp.Scene(bar, (contactqp.Support(0),), (contactqp.Load(n // 2, seed.loads[0].force),),
+                            (contactqp.Wall(n, seed.walls[0].gap, "+"),))
+    result = contactqp.solve(scene, formulation="condensed")
+    assert result.verified
+    assert result.contact_force[0] == pytest.approx(cone_contact_force(), rel=1e-12)

@@ -77,10 +77,11 @@ class Model:
     def compliance(self) -> np.ndarray:
         """φ (m/N) per free node of a chain held by one support: Σ 1/k_e over the elements
         between the support and the node, the displacement a unit force there causes."""
-        k = self.scene.bar.stiffness
+        from_0 = self.scene.bar.compliance_from_node_0
         support = self.scene.supports[0].node
-        return np.concatenate((np.cumsum(1.0 / k[:support][::-1])[::-1],
-                               np.cumsum(1.0 / k[support:])))
+        if support == 0:
+            return from_0[1:]
+        return np.abs(np.delete(from_0, support) - from_0[support])
 
     @cached_property
     def K(self) -> sp.csr_array:

@@ -170,6 +170,15 @@ class Bar:
         return self.youngs_modulus * self.areas / self.lengths
 
     @cached_property
+    def compliance_from_node_0(self) -> np.ndarray:
+        """Σ L/(EA) of the elements between node 0 and each node (m/N): kept with the bar,
+        so that re-solving a scene (new loads, gaps or walls) does not add it up again."""
+        compliance = np.zeros(self.n_nodes)
+        np.cumsum(1.0 / self.stiffness, out=compliance[1:])
+        compliance.flags.writeable = False
+        return compliance
+
+    @cached_property
     def node_x(self) -> np.ndarray:
         """Undeformed x of every node (m), node 0 at x = 0."""
         return np.concatenate(([0.0], np.cumsum(self.lengths)))

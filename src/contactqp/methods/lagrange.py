@@ -11,8 +11,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from contactqp import linalg
-from contactqp.methods._active_set import active_set_loop
 from contactqp.errors import OptionError
+from contactqp.methods._active_set import active_set_loop
 from contactqp.model import Model, elongation_rows
 from contactqp.result import Solution
 
