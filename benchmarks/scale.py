@@ -1,5 +1,5 @@
 """How the methods scale: the default scene's tapered bar with 10² … 10⁶ elements (exact areas),
-one wall at the tip, full and condensed formulations.
+one wall at the tip, full, strain and condensed formulations.
 
 Times are medians over repeats, in seconds and as ratios to a floor measured in the same run:
 one banded Cholesky factor-and-solve of K (LAPACK pbsv through scipy.linalg.solveh_banded).
@@ -26,13 +26,15 @@ from contactqp.model import build_model
 from contactqp.studies import cone_contact_force
 from timing import median_time  # benchmarks/ is on sys.path when a script runs
 
-RUNS = [  # (method, options, formulation, largest size it is run at in full formulation)
-    ("lagrange", {}, 10**6),
-    ("penalty", {}, 10**6),
-    ("augmented", {}, 10**6),
-    ("qp", {"backend": "clarabel"}, 10**4),
-    ("qp", {"backend": "osqp"}, 10**4),
+# (method, options, {formulation: largest size it is run at}); condensed runs at every size
+RUNS = [
+    ("lagrange", {}, {"full": 10**6, "strain": 10**5}),
+    ("penalty", {}, {"full": 10**6}),
+    ("augmented", {}, {"full": 10**6}),
+    ("qp", {"backend": "clarabel"}, {"full": 10**4, "strain": 10**5}),
+    ("qp", {"backend": "osqp"}, {"full": 10**4, "strain": 10**5}),
 ]
+FORMULATIONS = ("full", "strain", "condensed")
 
 
 def tapered_scene(elements: int) -> contactqp.Scene:
@@ -64,18 +66,21 @@ def main() -> None:
     rows = []
     exact = cone_contact_force()
     print(f"{'elements':>9} {'run':>22} {'formulation':>11} {'time (s)':>9} {'/floor':>7} "
-          f"{'force error':>11} {'verified':>8}")
+          f"{'force error':>11} {'verified':>8} {'iterations':>10}")
     for n in sizes:
         scene = tapered_scene(n)
         base = floor(scene, repeats)
         print(f"{n:>9} {'floor: pbsv on K':>22} {'':>11} {base:9.4f} {1.0:7.2f}")
-        for method, options, full_limit in RUNS:
-            for formulation in ("full", "condensed"):
+        for method, options, limits in RUNS:
+            for formulation in FORMULATIONS:
                 label = "/".join([method, *options.values()])
-                if formulation == "full" and n > full_limit:
+                if formulation != "condensed" and formulation not in limits:
+                    continue  # penalty and augmented have no strain formulation
+                limit = limits.get(formulation, n)
+                if n > limit:
                     rows.append({"elements": n, "run": label, "formulation": formulation,
-                                 "skipped": f"full formulation above {full_limit} elements: "
-                                            "an interior-point/ADMM solve of n unknowns"})
+                                 "skipped": f"{formulation} formulation above {limit} elements: "
+                                            "a solve of n (or 2n) unknowns, seconds to minutes"})
                     continue
                 result = contactqp.solve(scene, method, formulation=formulation, **options)
                 seconds = median_time(
@@ -84,9 +89,10 @@ def main() -> None:
                 error = abs(float(result.contact_force[0]) - exact) / exact
                 rows.append({"elements": n, "run": label, "formulation": formulation,
                              "seconds": seconds, "floor_seconds": base, "ratio": seconds / base,
-                             "force_error": error, "verified": result.verified})
+                             "force_error": error, "verified": result.verified,
+                             "iterations": result.iterations})
                 print(f"{n:>9} {label:>22} {formulation:>11} {seconds:9.4f} {seconds / base:7.2f} "
-                      f"{error:11.1e} {result.verified!s:>8}")
+                      f"{error:11.1e} {result.verified!s:>8} {result.iterations:>10}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     meta = {"machine": platform.machine(), "processor": platform.processor(),

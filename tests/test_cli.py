@@ -60,6 +60,26 @@ def test_solve_json_has_the_contract_keys_and_the_closed_form(capsys):
     assert data["reactions"][0] == pytest.approx(-(F - closed_form_force()), rel=1e-12)
 
 
+@pytest.mark.parametrize(("formulation", "method"), [("condensed", "qp"), ("strain", "qp"),
+                                                    ("strain", "lagrange")])
+def test_solve_formulations_give_the_closed_form(capsys, formulation, method):
+    code, out, _ = run(capsys, "solve", "--method", method, "--formulation", formulation,
+                       "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert data["verified"] is True
+    # Clarabel at default accuracy: ~3e-10 of the force (README accuracy table); exact: 1e-12
+    assert data["contact_force"][0] == pytest.approx(closed_form_force(), rel=1e-8)
+    if formulation == "strain":  # the tie rows' multipliers are the element forces
+        assert data["info"]["element_force"][3] == pytest.approx(-closed_form_force(), rel=1e-8)
+
+
+def test_solve_strain_with_the_penalty_method_is_one_line(capsys):
+    code, _, err = run(capsys, "solve", "--method", "penalty", "--formulation", "strain")
+    assert code == 2
+    assert "formulation='strain'" in err and len(err.strip().splitlines()) == 1
+
+
 def test_solve_equality_on_an_open_gap_reports_a_pulling_wall(capsys, tmp_path):
     scene = tmp_path / "open.toml"
     scene.write_text(

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from contactqp.errors import ContactqpError
-from contactqp.methods import CONTACT_KINDS, METHODS, solve
+from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS, solve
 from contactqp.result import Result
 from contactqp.scene import Scene, load_scene, seed_scene
 from contactqp.studies import PenaltySweep, Run, compare, mesh_convergence, penalty_sweep
@@ -105,7 +105,7 @@ def command_solve(args: argparse.Namespace) -> int:
     if args.penalty is not None:
         options["penalty"] = args.penalty
     options.update(_qp_options(args))
-    result = solve(_scene(args.scene), args.method, args.contact, **options)
+    result = solve(_scene(args.scene), args.method, args.contact, args.formulation, **options)
     if args.json:
         print(result.to_json())
     else:
@@ -191,6 +191,8 @@ def parser() -> argparse.ArgumentParser:
     solve_parser = scene_command("solve", command_solve, "solve a scene by one method")
     solve_parser.add_argument("--method", default="lagrange", choices=list(METHODS))
     solve_parser.add_argument("--contact", default="inequality", choices=CONTACT_KINDS)
+    solve_parser.add_argument("--formulation", default="full", choices=FORMULATIONS,
+                              help="full, condensed (contact nodes only) or strain (lagrange, qp)")
     solve_parser.add_argument("--penalty", type=float, help="penalty ε (N/m), method penalty")
     solve_parser.add_argument("--backend", help="QP backend, method qp (see contactqp solvers)")
     solve_parser.add_argument("--solver", help="QP solver of the backend, method qp")
