@@ -49,17 +49,23 @@ def scenes(draw):
                            tuple(walls))
 
 
+def scales(scene, full):
+    """(force, displacement) scales of a full-formulation Result for the tolerances.
+
+    Forces below ~1e-12 k·gap are round-off to Lagrange's active-set decision (it ignores
+    penetrations below 1e-12 of the displacement scale), so the force scale includes k·gap;
+    the displacement scale stays physical when the exact u is 0 (a closed zero gap)."""
+    largest_gap = max(w.gap for w in scene.walls)
+    force_scale = max(np.abs(full.contact_force).max(), max(abs(p.force) for p in scene.loads),
+                      scene.bar.stiffness.min() * largest_gap)
+    return force_scale, max(np.abs(full.u).max(), force_scale / scene.bar.stiffness.max())
+
+
 @settings(max_examples=25, deadline=None)
 @given(scenes())
 def test_condensed_equals_full_for_the_explicit_methods(scene):
     full = contactqp.solve(scene)
-    # forces below ~1e-12 k·gap are round-off to Lagrange's active-set decision (it ignores
-    # penetrations below 1e-12 of the displacement scale), so the force scale includes k·gap
-    largest_gap = max(w.gap for w in scene.walls)
-    force_scale = max(np.abs(full.contact_force).max(), max(abs(p.force) for p in scene.loads),
-                      scene.bar.stiffness.min() * largest_gap)
-    # a displacement scale that stays physical when the exact u is 0 (a closed zero gap)
-    disp_scale = max(np.abs(full.u).max(), force_scale / scene.bar.stiffness.max())
+    force_scale, disp_scale = scales(scene, full)
     for method in ("lagrange", "augmented"):
         condensed = contactqp.solve(scene, method, formulation="condensed")
         assert condensed.verified, condensed.message
@@ -121,10 +127,7 @@ NEEDS_DEFINITE_HESSIAN = {("qpsolvers", "quadprog"), ("qpsolvers", "ecos")}
 @given(scenes())
 def test_strain_and_condensed_equal_full(scene):
     full = contactqp.solve(scene)
-    largest_gap = max(w.gap for w in scene.walls)
-    force_scale = max(np.abs(full.contact_force).max(), max(abs(p.force) for p in scene.loads),
-                      scene.bar.stiffness.min() * largest_gap)
-    disp_scale = max(np.abs(full.u).max(), force_scale / scene.bar.stiffness.max())
+    force_scale, disp_scale = scales(scene, full)
     runs = [("lagrange", "strain", {}, 1e-7), ("lagrange", "condensed", {}, 1e-7),
             # an interior-point solver at accuracy="high" is ~1e-8 off (force_rtol), but on a
             # weakly active wall (gap 0 and λ = 0: degenerate complementarity) it stops when
