@@ -147,25 +147,9 @@ def determinate_chain_solve(compliance: np.ndarray, support: int, rhs: np.ndarra
     return out[0] if rhs.ndim == 1 else out.T
 
 
-def stiffness_matrix(bar: Bar) -> sp.csr_array:
-    """Assembled stiffness of every node of a bar (N/m): tridiagonal, singular (no supports)."""
-    k = bar.stiffness
-    diagonal = np.concatenate((k, [0.0])) + np.concatenate(([0.0], k))
-    return sp.csr_array(sp.diags_array([-k, diagonal, -k], offsets=[-1, 0, 1]))
-
-
 def element_forces(bar: Bar, u: np.ndarray) -> np.ndarray:
     """Axial force of each element (N, tension positive) from the nodal displacements (m)."""
     return bar.stiffness * np.diff(u)
-
-
-def internal_forces(bar: Bar, u: np.ndarray) -> np.ndarray:
-    """K_full u without forming K: the force each node needs to hold the elements (N)."""
-    n_e = element_forces(bar, u)
-    f = np.zeros(bar.n_nodes)
-    f[:-1] -= n_e
-    f[1:] += n_e
-    return f
 
 
 def wall_rows(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
@@ -232,17 +216,6 @@ def elongation_rows(model: Model) -> sp.csr_array:
     keep = column[nodes] >= 0
     return sp.csr_array((signs[keep], (rows[keep], column[nodes][keep])),
                         shape=(n_elements, model.n_free))
-
-
-def stiffness_seen_at(model: Model, nodes: np.ndarray) -> float | None:
-    """The stiffness (N/m) that free nodes ``nodes`` see together, 1 / ‖K⁻¹e‖∞ with e = 1 at
-    those nodes: about 1/f, f the flexibility Σ L/(EA) from a support to them, so it does not
-    grow as the mesh is refined (unlike the diagonal of K). None when ``nodes`` is empty."""
-    indicator = np.zeros(model.n_free)
-    indicator[np.asarray(nodes, dtype=int)] = 1.0
-    if not indicator.any():
-        return None
-    return 1.0 / float(np.abs(model.solve_K(indicator)).max())
 
 
 EXACT_WALL_STIFFNESS_LIMIT = 64  # wall nodes up to which wall_stiffness solves for S exactly

@@ -8,7 +8,8 @@ every contact force. No solver's own status is trusted; it is recorded beside th
 Residuals (all dimensionless, ∞-norms):
     equilibrium      section equilibrium: at every cut through the bar, the element force from u
                      against the force that the loads, walls (W) and supports (R) on one side
-                     need: ‖cumsum(K u − P − R − W)‖ / F, F the largest nodal force term
+                     need: ‖cumsum(K u − P − R − W)‖ / F (cumsum(K u) is minus the element
+                     forces, so no O(n) sum is formed: runs between loaded nodes), F the largest nodal force term
                      and at least the force the scene makes: the largest load, and
                      k_min × |gap| of a wall that starts past its node. The last cut is the
                      balance of the whole bar. A per-node residual is not enough: n
