@@ -8,11 +8,11 @@ every contact force. No solver's own status is trusted; it is recorded beside th
 Residuals (all dimensionless, ∞-norms):
     equilibrium      section equilibrium: at every cut through the bar, the element force from u
                      against the force that the loads, walls (W) and supports (R) on one side
-                     need: ‖cumsum(K u − P − R − W)‖ / F (cumsum(K u) is minus the element
-                     forces, so no O(n) sum is formed: runs between loaded nodes), F the largest nodal force term
+                     need: ‖cumsum(K u − P − R − W)‖ / F, F the largest nodal force term
                      and at least the force the scene makes: the largest load, and
-                     k_min × |gap| of a wall that starts past its node. The last cut is the
-                     balance of the whole bar. A per-node residual is not enough: n
+                     k_min × |gap| of a wall that starts past its node. cumsum(K u) is minus
+                     the element forces, so it is evaluated run by run between loaded nodes
+                     (:func:`section_residual`). The last cut is the balance of the whole bar. A per-node residual is not enough: n
                      residuals within tolerance add up along a long bar (OSQP on a
                      10⁴-element bar: 8e-7 per node, 0.56 % in the contact force)
     feasibility      inequality: max(0, max penetration) / U; equality: max |penetration| / U,
@@ -25,8 +25,7 @@ Residuals (all dimensionless, ∞-norms):
                      loads and no wall past its node (u = 0, λ = 0 exactly) do the gaps set
                      U, and k_min × largest gap F
     complementarity  max min(λᵢ⁺ / F, gapᵢ⁺ / U), gap = −penetration, x⁺ = max(x, 0)
-                     (inequality contact): a wall
-                     may push or stand off, not both. The product λᵢ·penetrationᵢ / (F·U)
+                     (inequality contact): a wall may push or stand off, not both. The product λᵢ·penetrationᵢ / (F·U)
                      is weaker: on a weakly active wall (zero gap, zero force) it passed a
                      QP answer 1.4e-4 F off (each factor ~1e-4, the product 1e-8)
     sign             max(0, −min λ) / F: how hard a wall pulls   (inequality contact)
