@@ -37,7 +37,7 @@ def force_rtol(backend: str, solver: str) -> float:
     KKT system, below 1e2 for the scenes here: rtol = 1e3·ε, and 1e-9 for an exact active-set
     method (ε = round-off). Through a cone rewrite, 10·√ε (SOC_REWRITE).
     """
-    settings = qpmod.accuracy_settings(solver, "high")
+    settings = qpmod.accuracy_settings(solver, "high", backend=backend)
     eps = min((settings[k] for k in TOLERANCE_KEYS if k in settings), default=1e-12)
     if (backend, solver) in SOC_REWRITE:
         return 10.0 * math.sqrt(eps)

@@ -310,6 +310,14 @@ ACCURACY: dict[str, dict[str, dict[str, Any]]] = {
     "quadprog": {"default": {}, "high": {}},
 }
 
+# Where one backend's rewrite of the QP needs other settings than the solver's entry above.
+# qpsolvers hands ECOS a cone rewrite through a Cholesky factor of P: at 1e-10 the contact force
+# stayed 3.9e-8 off on the condensed 1e6-element bar, at 1e-12 1.8e-10 (measured); cvxpy's
+# rewrite for ECOS is right at 1e-10 (5e-9) and fails an open-gap equality scene at 1e-12.
+BACKEND_ACCURACY: dict[tuple[str, str], dict[str, dict[str, Any]]] = {
+    ("qpsolvers", "ecos"): {"high": {"abstol": 1e-12, "reltol": 1e-12, "feastol": 1e-12}},
+}
+
 # Settings added when contactqp has scaled the QP itself. Measured on a 1e4-element bar at
 # "default": Clarabel's equilibration on top of ours 1.2e-8 off in λ, off 9e-11; at 1e5
 # elements on: "AlmostSolved" 1.3e-4 off, off: "Solved" 5e-10 off in 6 iterations. OSQP's
@@ -320,9 +328,11 @@ PRESCALED: dict[str, dict[str, Any]] = {
 }
 
 
-def accuracy_settings(solver: str, accuracy: str, scaled: bool = False) -> dict[str, Any]:
-    """The settings ``accuracy`` means for ``solver`` (any case), plus :data:`PRESCALED` when
-    contactqp has ``scaled`` the QP.
+def accuracy_settings(solver: str, accuracy: str, scaled: bool = False,
+                      backend: str | None = None) -> dict[str, Any]:
+    """The settings ``accuracy`` means for ``solver`` (any case) through ``backend`` (None: any;
+    :data:`BACKEND_ACCURACY` overrides), plus :data:`PRESCALED` when contactqp has ``scaled``
+    the QP.
 
     The scaled QP is O(1), so absolute and relative tolerances are alike. "default" is the
     solver's own default, written out so that every backend passes the same values (cvxpy
@@ -338,7 +348,7 @@ def accuracy_settings(solver: str, accuracy: str, scaled: bool = False) -> dict[
         osqp       eps_abs, eps_rel                             1e-3                   1e-9
                    max_iter; polishing                          4000; on               1e5; on
         scs        eps_abs, eps_rel; max_iters                  1e-4; 1e5              1e-9; 1e5
-        ecos       abstol, reltol, feastol                      1e-8                   1e-10
+        ecos       abstol, reltol, feastol                      1e-8                   1e-10 (e)
         cvxopt     abstol, reltol, feastol                      1e-7, 1e-6, 1e-7       1e-8 (a)
         piqp       eps_abs, eps_rel                             1e-8, 1e-9             1e-10, 1e-11
         proxqp     eps_abs (eps_rel 0)                          1e-5                   1e-10
@@ -357,6 +367,7 @@ def accuracy_settings(solver: str, accuracy: str, scaled: bool = False) -> dict[
         cvxpy passes only eps_abs and eps_rel on to ProxQP, so through cvxpy the gap is unchecked.
     (c) HiGHS regularises the Hessian by 1e-7 by default, which leaves ~1e-7 in λ (measured).
     (d) At 1e-12 Clarabel stops "AlmostSolved" on a 1e4-element bar, though 1e-10 right.
+    (e) 1e-12 through qpsolvers (:data:`BACKEND_ACCURACY`).
 
     With ``scale=True`` the QP is already scaled, and :data:`PRESCALED` turns off Clarabel's
     and OSQP's own equilibration (through every backend), which measured better.
@@ -365,6 +376,7 @@ def accuracy_settings(solver: str, accuracy: str, scaled: bool = False) -> dict[
         raise OptionError(f"accuracy must be one of {', '.join(ACCURACIES)}; got {accuracy!r}")
     name = solver.lower()
     settings = dict(ACCURACY.get(name, {}).get(accuracy, {}))
+    settings.update(BACKEND_ACCURACY.get((backend or "", name), {}).get(accuracy, {}))
     return {**settings, **PRESCALED.get(name, {})} if scaled else settings
 
 
@@ -511,7 +523,7 @@ def solve_qp(model: Model, contact: str, *, backend: str = DEFAULT_BACKEND,
     as the QP in displacements (``formulation="full"``) or with element elongations
     ("strain"; the tie rows' multipliers, the element forces in N, go to ``info``)."""
     module, name = resolve_solver(backend, solver)
-    settings = accuracy_settings(name, accuracy, scaled=_scale_option(scale))
+    settings = accuracy_settings(name, accuracy, scaled=_scale_option(scale), backend=backend)
     start = time.perf_counter()
     qp = qp_from_model(model, contact, scale, formulation)
     built = time.perf_counter()
@@ -539,7 +551,7 @@ def solve_qp(model: Model, contact: str, *, backend: str = DEFAULT_BACKEND,
 
 
 __all__ = [
-    "ACCURACY", "BACKENDS", "DEFAULT_BACKEND", "DEFAULT_SCALE", "DUAL_SIGNS", "PRESCALED",
+    "ACCURACY", "BACKEND_ACCURACY", "BACKENDS", "DEFAULT_BACKEND", "DEFAULT_SCALE", "DUAL_SIGNS", "PRESCALED",
     "QPOutcome", "QPProblem", "QPSolverInfo", "available_qp_solvers", "qp_from_model",
     "qp_problem", "scales", "solve_qp",
 ]
