@@ -83,7 +83,10 @@ def _write_charts(result: Result, sweep: PenaltySweep, out: Path) -> list[str]:
 def command_compare(args: argparse.Namespace) -> int:
     scene = _scene(args.scene)
     runs = compare(scene)
-    print(f"scene: {scene.name} ({scene.bar.n_elements} elements, {len(scene.walls)} wall(s))")
+    bars = f"{len(scene.bars)} bars, " if len(scene.bars) > 1 else ""
+    contacts = f", {len(scene.contacts)} bar contact(s)" if scene.contacts else ""
+    print(f"scene: {scene.name} ({bars}{scene.n_elements} elements, {len(scene.walls)} wall(s)"
+          f"{contacts})")
     print(table(runs))
     for line in notes(runs):
         print(f"note: {line}")

@@ -1,10 +1,13 @@
 """Pure functions from a scene to the algebra: sparse K, P, constraint rows C and gaps g.
 
-Supports are eliminated: the unknowns are the displacements of the free nodes only. The wall
-constraints are written ``C D <= g`` (or ``= g``), one row per wall in scene order, with the
-wall's side folded into the sign of the row: a "+" wall is u_i <= gap, a "-" wall is
--u_i <= gap. With the Lagrangian L = Π + λᵀ(C D − g), λ >= 0 is then the force with which
-each wall pushes the bar, and the wall's force on the bar in +x is −Cᵀλ.
+The nodes of every bar are numbered in one sequence (:meth:`Scene.global_node`), so K is one
+tridiagonal band whose coupling is zero between bars. Supports are eliminated: the unknowns
+are the displacements of the free nodes only. The contact constraints are written ``C D <= g``
+(or ``= g``), one row per wall in scene order, then one per bar contact, with the wall's side
+folded into the sign of the row: a "+" wall is u_i <= gap, a "-" wall is -u_i <= gap, a bar
+contact u_a − u_b <= gap. With the Lagrangian L = Π + λᵀ(C D − g), λ >= 0 is then the force
+with which each wall (or the other bar) pushes, and the contacts' force on the nodes in +x is
+−Cᵀλ.
 """
 
 from __future__ import annotations
@@ -40,8 +43,9 @@ class Model:
     scene : the scene it was built from.
     free : node number of each unknown (the free nodes, in order).
     P : loads on the free nodes (N).
-    C : sparse constraint rows, one per wall (dimensionless, ±1 at the wall's node), CSR.
-    g : the walls' gaps (m).
+    C : sparse constraint rows, one per wall (±1 at the wall's node) then one per bar contact
+        (+1 at node a, −1 at node b), dimensionless, CSR.
+    g : the contacts' gaps (m).
     stiffness : K, the stiffness of the free nodes (N/m): for a chain its LAPACK symmetric
         lower band storage (2 x n_free: diagonal, sub-diagonal), else a sparse matrix.
     K : K as a sparse CSR matrix (made from the band when first asked for).
@@ -66,22 +70,40 @@ class Model:
         SolverError when K is not positive definite."""
         if self.K_band is None:
             return linalg.solve(self.K, rhs, spd=True)
-        if len(self.scene.supports) == 1:
-            return determinate_chain_solve(self.compliance, self.scene.supports[0].node, rhs)
+        if self.determinate is not None:
+            rhs = np.asarray(rhs, dtype=float)
+            out = np.empty(rhs.shape)
+            for block, support in self.determinate:  # one block of free nodes per bar
+                out[block] = determinate_chain_solve(self.compliance[block], support, rhs[block])
+            return out
         try:
             return linalg.solve_spd_band(self.K_band, rhs)
         except np.linalg.LinAlgError as error:
             raise SolverError(f"K is not positive definite ({error})") from None
 
     @cached_property
+    def determinate(self) -> tuple[tuple[slice, int], ...] | None:
+        """When every bar is held by exactly one support (statically determinate): per bar,
+        the slice of its free nodes and the support's position in that slice. Else None."""
+        scene = self.scene
+        if self.K_band is None or len(scene.supports) != len(scene.bars):
+            return None
+        blocks = []
+        first = np.searchsorted(self.free, scene.node_offsets)
+        for b, support in sorted((s.bar, s.node) for s in scene.supports):
+            blocks.append((slice(int(first[b]), int(first[b + 1])), support))
+        return tuple(blocks)
+
+    @cached_property
     def compliance(self) -> np.ndarray:
-        """φ (m/N) per free node of a chain held by one support: Σ 1/k_e over the elements
-        between the support and the node, the displacement a unit force there causes."""
-        from_0 = self.scene.bar.compliance_from_node_0
-        support = self.scene.supports[0].node
-        if support == 0:
-            return from_0[1:]
-        return np.abs(np.delete(from_0, support) - from_0[support])
+        """φ (m/N) per free node when every bar is held by one support: Σ 1/k_e over the
+        elements between the node and its bar's support, the displacement a unit force there
+        causes."""
+        parts = []
+        for b, s in sorted((s.bar, s.node) for s in self.scene.supports):  # one per bar
+            from_0 = self.scene.bars[b].compliance_from_node_0
+            parts.append(from_0[1:] if s == 0 else np.abs(np.delete(from_0, s) - from_0[s]))
+        return np.concatenate(parts) if len(parts) > 1 else parts[0]
 
     @cached_property
     def K(self) -> sp.csr_array:
@@ -95,12 +117,13 @@ class Model:
         return int(self.free.size)
 
     @property
-    def n_walls(self) -> int:
+    def n_contacts(self) -> int:
+        """Contact rows: one per wall, then one per bar contact."""
         return int(self.g.size)
 
     def full_displacements(self, u_free: np.ndarray) -> np.ndarray:
         """Displacements of every node (m), zero at the supports."""
-        supports = sorted({s.node for s in self.scene.supports})
+        supports = np.sort(self.scene.support_nodes)
         # np.insert puts each zero before the free node that follows the support
         return np.insert(np.asarray(u_free, dtype=float),
                          [node - i for i, node in enumerate(supports)], 0.0)
@@ -147,40 +170,53 @@ def determinate_chain_solve(compliance: np.ndarray, support: int, rhs: np.ndarra
     return out[0] if rhs.ndim == 1 else out.T
 
 
-def element_forces(bar: Bar, u: np.ndarray) -> np.ndarray:
-    """Axial force of each element (N, tension positive) from the nodal displacements (m)."""
-    return bar.stiffness * np.diff(u)
+def element_forces(scene: Scene | Bar, u: np.ndarray) -> np.ndarray:
+    """Axial force of each element (N, tension positive) from the nodal displacements (m),
+    bar after bar (:attr:`Scene.stiffness`)."""
+    if isinstance(scene, Bar):
+        return scene.stiffness * np.diff(u)
+    stretch = np.diff(u)
+    if scene.junctions.size:
+        stretch = np.delete(stretch, scene.junctions)
+    return scene.stiffness * stretch
 
 
-def wall_rows(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """(node, sign) of each wall's constraint row sign·u_node <= gap, in scene order."""
-    nodes = np.array([w.node for w in scene.walls], dtype=int)
-    signs = np.array([w.sign for w in scene.walls], dtype=float)
-    return nodes, signs
+def slot_forces(scene: Scene, forces: np.ndarray) -> np.ndarray:
+    """Element forces placed between global nodes j and j + 1, 0 at a junction between bars."""
+    if not scene.junctions.size:
+        return forces
+    return np.insert(forces, scene.junctions - np.arange(scene.junctions.size), 0.0)
+
+
+def contact_matrix(scene: Scene) -> sp.csr_array:
+    """C in global node numbering (contact rows x nodes)."""
+    rows, nodes, values, gaps = scene.contact_rows
+    return sp.csr_array((values, (rows, nodes)), shape=(gaps.size, scene.n_nodes))
 
 
 def wall_forces(scene: Scene, contact_force: np.ndarray) -> np.ndarray:
-    """Force of the walls on each node in +x (N): −Cᵀλ in node numbering."""
-    nodes, signs = wall_rows(scene)
+    """Force of the walls and bar contacts on each node in +x (N): −Cᵀλ in node numbering."""
+    rows, nodes, values, _ = scene.contact_rows
     f = np.zeros(scene.n_nodes)
-    np.add.at(f, nodes, -signs * np.asarray(contact_force, dtype=float))
+    np.add.at(f, nodes, -values * np.asarray(contact_force, dtype=float)[rows])
     return f
 
 
 def penetration(scene: Scene, u: np.ndarray) -> np.ndarray:
-    """How far each node is past its wall (m), C u − g: positive = penetrated."""
-    nodes, signs = wall_rows(scene)
-    gaps = np.array([w.gap for w in scene.walls], dtype=float)
-    return signs * u[nodes] - gaps
+    """How far each contact is closed past its gap (m), C u − g: positive = penetrated."""
+    rows, nodes, values, gaps = scene.contact_rows
+    closed = np.zeros(gaps.size)
+    np.add.at(closed, rows, values * u[nodes])
+    return closed - gaps
 
 
 def build_model(scene: Scene) -> Model:
     """The model of a scene, O(n) in time and memory: K comes straight from the element
     stiffnesses in band form (a chain with its supports taken out)."""
     n = scene.n_nodes
-    supports = np.array(sorted({s.node for s in scene.supports}), dtype=np.intp)
+    supports = np.sort(scene.support_nodes)
     free = np.delete(np.arange(n), supports)
-    k = scene.bar.stiffness
+    k = scene.slot_stiffness  # 0 between bars: no element joins them
     band = np.zeros((2, free.size))
     # node j's diagonal is k_(j-1) + k_j; its sub-diagonal entry couples it to node j + 1
     # through element j, unless node j + 1 is a support (then the entry is dropped)
@@ -192,10 +228,10 @@ def build_model(scene: Scene) -> Model:
     sub[:-1] = -k
     sub[supports[supports > 0] - 1] = 0.0
     band[1] = np.delete(sub, supports)
-    nodes, signs = wall_rows(scene)
-    columns = nodes - np.searchsorted(supports, nodes)  # free-node number of each wall's node
-    C = sp.csr_array((signs, (np.arange(nodes.size), columns)), shape=(nodes.size, free.size))
-    g = np.array([w.gap for w in scene.walls], dtype=float)
+    rows, nodes, values, g = scene.contact_rows
+    keep = ~np.isin(nodes, supports)  # a bar contact's supported end contributes nothing
+    columns = nodes[keep] - np.searchsorted(supports, nodes[keep])  # free-node numbers
+    C = sp.csr_array((values[keep], (rows[keep], columns)), shape=(g.size, free.size))
     P = np.delete(scene.nodal_loads(), supports)
     return Model(scene, free, band, P, C, g)
 
@@ -206,12 +242,14 @@ def elongation_rows(model: Model) -> sp.csr_array:
     Needs a chain model (one built by :func:`build_model`)."""
     if model.K_band is None:
         raise OptionError("formulation='strain' needs a chain model (one built by build_model)")
-    n_elements = model.scene.bar.n_elements
-    column = np.full(model.scene.n_nodes, -1)
+    scene = model.scene
+    n_elements = scene.n_elements
+    column = np.full(scene.n_nodes, -1)
     column[model.free] = np.arange(model.n_free)
     element = np.arange(n_elements)
+    first = np.delete(np.arange(scene.n_nodes - 1), scene.junctions)  # element e's first node
     rows = np.concatenate((element, element))
-    nodes = np.concatenate((element, element + 1))  # element e joins nodes e and e + 1
+    nodes = np.concatenate((first, first + 1))
     signs = np.concatenate((-np.ones(n_elements), np.ones(n_elements)))
     keep = column[nodes] >= 0
     return sp.csr_array((signs[keep], (rows[keep], column[nodes][keep])),
@@ -287,7 +325,7 @@ def condense(model: Model) -> Condensed:
     C = model.C.tocoo()
     reduced = Model(
         model.scene, model.free[nodes], sp.csr_array(stiffness), stiffness @ u0[nodes],
-        sp.csr_array((C.data, (C.row, column[C.col])), shape=(model.n_walls, nodes.size)),
+        sp.csr_array((C.data, (C.row, column[C.col])), shape=(model.n_contacts, nodes.size)),
         model.g,
     )
     return Condensed(reduced, u0, X)

@@ -20,31 +20,32 @@ def plot_bar(result: Result, ax: Axes | None = None, magnification: float | None
     """The undeformed bar (grey) and the deformed one (blue), displacements magnified, with the
     walls at their gaps (same magnification) and the supports."""
     ax = _axes(ax)
-    bar = result.scene.bar
-    x = bar.node_x
+    scene = result.scene
+    x = scene.node_x  # the bars end to end
+    first = np.delete(np.arange(scene.n_nodes - 1), scene.junctions)  # each element's first node
     largest = max(float(np.abs(result.u).max()), max((w.gap for w in result.scene.walls), default=0))
     if magnification is None:
         magnification = 0.1 * x[-1] / largest if largest > 0 else 1.0
-    half = np.sqrt(bar.areas / np.pi)  # radius of the equivalent circle (m)
+    half = np.sqrt(scene.areas / np.pi)  # radius of the equivalent circle (m)
     depth = 2.5 * half.max()
     for row, (nodes, colour, name) in enumerate(
         ((x, "0.75", "undeformed"), (x + magnification * result.u, "tab:blue", "deformed"))
     ):
         y = -row * depth
-        for e in range(bar.n_elements):
-            ax.add_patch(Rectangle((nodes[e], y - half[e]), nodes[e + 1] - nodes[e], 2 * half[e],
+        for e, j in enumerate(first):
+            ax.add_patch(Rectangle((nodes[j], y - half[e]), nodes[j + 1] - nodes[j], 2 * half[e],
                                    facecolor=colour, edgecolor="k", linewidth=0.5,
                                    label=name if e == 0 else None))
         ax.plot(nodes, np.full(nodes.size, y), "k.", markersize=4)
     top, bottom = half.max() * 1.3, -depth - half.max() * 1.3
     for i, wall in enumerate(result.scene.walls):
-        at = x[wall.node] + wall.sign * magnification * wall.gap
+        at = x[scene.global_node(wall.bar, wall.node)] + wall.sign * magnification * wall.gap
         ax.plot([at, at], [bottom, top], color="tab:red", linewidth=2.5,
                 label="wall" if i == 0 else None)
         ax.annotate(f"{result.contact_force[i]:.4g} N", (at, top), color="tab:red",
                     ha="left" if wall.side == "+" else "right", va="bottom", fontsize=8)
     for s in result.scene.supports:
-        ax.plot([x[s.node]] * 2, [bottom, top], color="k", linewidth=4,
+        ax.plot([x[scene.global_node(s.bar, s.node)]] * 2, [bottom, top], color="k", linewidth=4,
                 label="support" if s is result.scene.supports[0] else None)
     ax.set_xlim(x[0] - 0.05 * x[-1], x[-1] * 1.05 + magnification * largest)
     ax.set_ylim(bottom * 1.2, top * 1.6)

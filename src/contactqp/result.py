@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from contactqp.model import Model, element_forces, penetration
+from contactqp.model import Model, element_forces, penetration, slot_forces, wall_forces
 from contactqp.scene import Scene
 
 _TINY = 1e-300
@@ -89,17 +89,21 @@ class Check:
 
 
 def external_forces(scene: Scene, contact_force: np.ndarray,
-                    reactions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(node, force in +x, N) of every force on the bar from outside: the loads, the walls'
-    −sign·λ and the supports' reactions, one entry each (a node may repeat)."""
-    walls = scene.walls
-    nodes = np.array([p.node for p in scene.loads] + [w.node for w in walls]
-                     + [s.node for s in scene.supports], dtype=np.intp)
-    signs = np.array([w.sign for w in walls], dtype=float)
-    forces = np.concatenate((np.array([p.force for p in scene.loads], dtype=float),
-                             -signs * np.asarray(contact_force, dtype=float).reshape(-1),
+                    reactions: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """(global node, force in +x, N) of every force on the bars from outside: the loads (point
+    loads, then the distributed loads' nodal forces), the contacts' −Cᵀλ and the supports'
+    reactions, one entry each (a node may repeat); and how many entries are loads."""
+    rows, contact_nodes, values, _ = scene.contact_rows
+    nodes, loads = scene.load_nodes, np.array([p.force for p in scene.loads], dtype=float)
+    if scene.distributed:
+        spread = scene.with_loads(()).nodal_loads()
+        at = np.flatnonzero(spread)
+        nodes, loads = np.concatenate((nodes, at)), np.concatenate((loads, spread[at]))
+    lam = np.asarray(contact_force, dtype=float).reshape(-1)
+    all_nodes = np.concatenate((nodes, contact_nodes, scene.support_nodes)).astype(np.intp)
+    forces = np.concatenate((loads, -values * lam[rows] if lam.size else np.zeros(rows.size),
                              np.asarray(reactions, dtype=float).reshape(-1)))
-    return nodes, forces
+    return all_nodes, forces, int(loads.size)
 
 
 def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.ndarray,
@@ -108,22 +112,23 @@ def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.
     """Check displacements (m, every node) and forces (N) against the scene, independently of
     how they were found. ``contact`` is "inequality" or "equality". ``element_force``: the
     element forces k_e·(u_(e+1) − u_e) when the caller has them already (else computed)."""
-    forces = element_forces(scene.bar, u) if element_force is None else element_force
-    nodes, external = external_forces(scene, contact_force, reactions)
-    load_scale = _norm(external[: len(scene.loads)])
-    gaps = np.array([w.gap for w in scene.walls], dtype=float)
+    forces = element_forces(scene, u) if element_force is None else element_force
+    nodes, external, n_loads = external_forces(scene, contact_force, reactions)
+    load_scale = _norm(external[:n_loads])
+    gaps = scene.gaps
     # What makes forces: the loads, and walls that start past their node (k·|gap|, k the
     # softest element). Only when neither does (exact answer u = 0, every computed force
     # round-off) do the gaps set the scales. Open gaps otherwise stay out: a far wall's gap
     # would make U and F large and hide a wrong force at a near one.
-    k_min, k_max = float(scene.bar.stiffness.min()), float(scene.bar.stiffness.max())
+    k_min, k_max = float(scene.stiffness.min()), float(scene.stiffness.max())
     source = max(load_scale, k_min * float(np.max(-gaps, initial=0.0)))
     unloaded = _norm(gaps) if source == 0.0 else 0.0
     force_scale = max(_norm(external), _norm(forces), source, k_min * unloaded, _TINY)
     disp_scale = max(_norm(u), force_scale / k_max, unloaded, _TINY)
     # section equilibrium: cutting element j leaves nodes 0..j, held by the outside forces on
     # them and the element's pull N_j; past the last node the cut is the whole bar's balance
-    equilibrium = section_residual(forces, nodes, external) / force_scale
+    # (between bars no element joins the nodes: the cut there is the balance of the bars before)
+    equilibrium = section_residual(slot_forces(scene, forces), nodes, external) / force_scale
     lam = np.asarray(contact_force, dtype=float)
     pen = penetration(scene, u)
     pulling = float(np.max(-lam, initial=0.0)) / force_scale  # NaN stays NaN: not physical
@@ -269,15 +274,17 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def _support_reaction(scene: Scene, forces: np.ndarray, contact_force: np.ndarray,
-                      node: int) -> float:
-    """The force (N, +x) a support at ``node`` applies: what node equilibrium leaves over from
-    the elements on either side, the loads and the walls there."""
-    right = forces[node] if node < forces.size else 0.0
-    left = forces[node - 1] if node > 0 else 0.0
-    loads = sum(p.force for p in scene.loads if p.node == node)
-    walls = sum(-w.sign * f for w, f in zip(scene.walls, contact_force) if w.node == node)
-    return float(left - right - loads - walls)
+def _support_reactions(scene: Scene, forces: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
+    """The force (N, +x) each support applies: what equilibrium of its node leaves over from
+    the elements on either side (``forces`` by slot, 0 between bars), the loads and the
+    contacts there."""
+    nodes = scene.support_nodes
+    right = np.where(nodes < forces.size, forces[np.minimum(nodes, forces.size - 1)], 0.0)
+    left = np.where(nodes > 0, forces[np.maximum(nodes - 1, 0)], 0.0)
+    outside = scene.nodal_loads()[nodes]
+    if scene.contacts:  # a bar contact may end at a support; walls may not
+        outside = outside + wall_forces(scene, contact_force)[nodes]
+    return left - right - outside
 
 
 def make_result(model: Model, solution: Solution, *, method: str, contact: str,
@@ -287,20 +294,24 @@ def make_result(model: Model, solution: Solution, *, method: str, contact: str,
     scene = model.scene
     u = model.full_displacements(np.asarray(solution.u_free, dtype=float))
     lam = np.asarray(solution.contact_force, dtype=float).reshape(-1)
-    forces = element_forces(scene.bar, u)
+    forces = element_forces(scene, u)
     # reactions are what equilibrium at the supports needs (the force of the elements on each
-    # side, less loads and walls there); the check then tests every section of the bar
-    reactions = np.array([_support_reaction(scene, forces, lam, s.node) for s in scene.supports])
-    stress = forces / scene.bar.areas
-    yield_stress = scene.bar.yield_stress
-    ratio = None if yield_stress is None else float(np.abs(stress).max() / yield_stress)
+    # side, less loads and contacts there); the check then tests every section of every bar
+    reactions = _support_reactions(scene, slot_forces(scene, forces), lam)
+    stress = forces / scene.areas
+    yield_stress = scene.yield_stress
+    ratio = None if yield_stress is None else float(np.fmax.reduce(np.abs(stress) / yield_stress))
     found = check(scene, u, lam, reactions, contact, tolerances, element_force=forces)
     warnings: list[str] = []
     if ratio is not None and ratio > 1.0:
-        e = int(np.abs(stress).argmax())
+        e = int(np.nanargmax(np.abs(stress) / yield_stress))
+        where = f"element {e}"
+        if len(scene.bars) > 1:
+            bar = int(np.searchsorted(np.cumsum([b.n_elements for b in scene.bars]), e, "right"))
+            where = f"bar[{bar}] element {e - sum(b.n_elements for b in scene.bars[:bar])}"
         warnings.append(
-            f"stress beyond yield: element {e} carries {stress[e] / 1e6:.1f} MPa, "
-            f"{ratio:.2f} x the yield stress {yield_stress / 1e6:.0f} MPa (a linear-elastic "
+            f"stress beyond yield: {where} carries {stress[e] / 1e6:.1f} MPa, "
+            f"{ratio:.2f} x the yield stress {yield_stress[e] / 1e6:.0f} MPa (a linear-elastic "
             "answer past yield)"
         )
     if solution.claimed_success and not found.verified:

@@ -1,8 +1,12 @@
-"""What the user describes: one elastic bar, its supports, point loads and rigid walls.
+"""What the user describes: elastic bars, their supports, point and distributed loads, rigid
+walls and contacts between bars.
 
-Units are SI throughout: m, m², N, Pa. Nodes are numbered 0..n along the bar (+x); element e
-joins nodes e and e + 1. Every value is checked when the scene is built, and an error names
-the field (as it is spelled in the TOML file) and the value.
+Units are SI throughout: m, m², N, Pa. Each bar numbers its nodes 0..n along +x; element e
+joins its nodes e and e + 1; supports, loads and walls name a bar (default 0) and a node of
+it. The algebra numbers every node of every bar in one sequence, bar after bar
+(:meth:`Scene.global_node`); no element joins the last node of one bar to the first of the
+next. Every value is checked when the scene is built, and an error names the field (as it is
+spelled in the TOML file) and the value.
 """
 
 from __future__ import annotations
@@ -10,7 +14,7 @@ from __future__ import annotations
 import json
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any, Literal
@@ -52,12 +56,21 @@ def _number(name: str, value: Any, *, minimum: float | None = None, strict: bool
     return number
 
 
-def _node(name: str, value: Any, n_nodes: int) -> int:
+def _node(name: str, value: Any, n_nodes: int, owner: str = "the bar") -> int:
     """Return ``value`` as a node index of a bar with ``n_nodes`` nodes, else a SceneError."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise SceneError(f"{name} must be a whole node number, got {value!r}")
     if not 0 <= value < n_nodes:
-        raise SceneError(f"{name} = {value}: the bar has nodes 0 to {n_nodes - 1}")
+        raise SceneError(f"{name} = {value}: {owner} has nodes 0 to {n_nodes - 1}")
+    return int(value)
+
+
+def _bar(name: str, value: Any, n_bars: int) -> int:
+    """Return ``value`` as a bar index of a scene with ``n_bars`` bars, else a SceneError."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise SceneError(f"{name} must be a whole bar number, got {value!r}")
+    if not 0 <= value < n_bars:
+        raise SceneError(f"{name} = {value}: the scene has bars 0 to {n_bars - 1}")
     return int(value)
 
 
@@ -186,17 +199,45 @@ class Bar:
 
 @dataclass(frozen=True)
 class Support:
-    """A node held at zero displacement."""
+    """A node of bar ``bar`` held at zero displacement."""
 
     node: int
+    bar: int = 0
 
 
 @dataclass(frozen=True)
 class Load:
-    """A point load at a node (N, positive in +x)."""
+    """A point load at a node of bar ``bar`` (N, positive in +x)."""
 
     node: int
     force: float
+    bar: int = 0
+
+
+@dataclass(frozen=True)
+class DistributedLoad:
+    """A uniform axial load ``intensity`` (N/m, positive in +x) on elements ``start`` to
+    ``stop`` − 1 of bar ``bar`` (``stop`` None: to the bar's end). Each element passes
+    intensity × length / 2 to each of its nodes: the consistent load of a linear element, with
+    which the nodal displacements of a bar are exact."""
+
+    intensity: float
+    bar: int = 0
+    start: int = 0
+    stop: int | None = None
+
+
+@dataclass(frozen=True)
+class BarContact:
+    """Contact between node ``node_a`` of bar ``bar_a`` and node ``node_b`` of bar ``bar_b``,
+    ``gap`` (m, >= 0) apart, a facing b in +x: u_a − u_b <= gap. Its force λ >= 0 pushes a
+    in −x and b in +x."""
+
+    bar_a: int
+    node_a: int
+    bar_b: int
+    node_b: int
+    gap: float
 
 
 @dataclass(frozen=True)
@@ -210,6 +251,7 @@ class Wall:
     node: int
     gap: float
     side: WallSide = "+"
+    bar: int = 0
 
     @property
     def sign(self) -> float:
@@ -219,72 +261,271 @@ class Wall:
 
 @dataclass(frozen=True, eq=False)
 class Scene:
-    """A bar with supports, point loads and rigid walls, checked on construction."""
+    """Bars with supports, loads, rigid walls and bar-to-bar contacts, checked on construction.
 
-    bar: Bar
+    ``bar`` is one :class:`Bar` or a sequence of them (kept as the Bar itself when there is
+    one, else as a tuple; :attr:`bars` is always the tuple). Every bar needs a support.
+    Contact rows, in this order everywhere (contact forces, penetrations): one per wall, then
+    one per bar contact.
+    """
+
+    bar: Bar | tuple[Bar, ...]
     supports: tuple[Support, ...]
     loads: tuple[Load, ...] = ()
     walls: tuple[Wall, ...] = ()
     name: str = "scene"
+    distributed: tuple[DistributedLoad, ...] = ()
+    contacts: tuple[BarContact, ...] = ()
 
     def __post_init__(self) -> None:
-        if not isinstance(self.bar, Bar):
-            raise SceneError(f"bar must be a contactqp.Bar, got {type(self.bar).__name__}")
-        n = self.bar.n_nodes
+        bars = (self.bar,) if isinstance(self.bar, Bar) else self.bar
+        if isinstance(bars, (str, bytes)) or not isinstance(bars, (tuple, list)) or not bars:
+            raise SceneError(f"bar must be a contactqp.Bar or a list of them, got {self.bar!r}")
+        bars = tuple(_as(Bar, b, f"bar[{i}]" if len(bars) > 1 else "bar")
+                     for i, b in enumerate(bars))
+        object.__setattr__(self, "bar", bars[0] if len(bars) == 1 else bars)
         supports = tuple(_as(Support, s, f"support[{i}]") for i, s in enumerate(self.supports))
         loads = tuple(_as(Load, s, f"load[{i}]") for i, s in enumerate(self.loads))
         walls = tuple(_as(Wall, s, f"wall[{i}]") for i, s in enumerate(self.walls))
+        distributed = tuple(_as(DistributedLoad, s, f"distributed_load[{i}]")
+                            for i, s in enumerate(self.distributed))
+        contacts = tuple(_as(BarContact, s, f"contact[{i}]") for i, s in enumerate(self.contacts))
         if not supports:
             raise SceneError("support: no support holds the bar; give at least one [[support]]")
+        node = self._node_checker(bars)
         held: dict[int, int] = {}
         for i, s in enumerate(supports):
-            node = _node(f"support[{i}].node", s.node, n)
-            if node in held:
-                raise SceneError(f"support[{i}].node = {node} repeats support[{held[node]}]")
-            held[node] = i
-        if len(held) == n:
-            raise SceneError(f"support: every node (0 to {n - 1}) is a support; nothing can move")
+            at = node(f"support[{i}]", s.bar, s.node)
+            if at in held:
+                raise SceneError(f"support[{i}].node = {s.node} repeats support[{held[at]}]")
+            held[at] = i
+        for b in sorted(set(range(len(bars))) - {s.bar for s in supports}):
+            raise SceneError(f"support: bar[{b}] has no support; every bar needs one [[support]] "
+                             "(a bar held only by contact can move freely)")
+        if len(held) == sum(b.n_nodes for b in bars):
+            raise SceneError("support: every node is a support; nothing can move")
         for i, load in enumerate(loads):
-            _node(f"load[{i}].node", load.node, n)
+            node(f"load[{i}]", load.bar, load.node)
             _number(f"load[{i}].force", load.force)
+        for i, q in enumerate(distributed):
+            name = f"distributed_load[{i}]"
+            _number(f"{name}.intensity", q.intensity)
+            n_elements = bars[_bar(f"{name}.bar", q.bar, len(bars))].n_elements
+            stop = n_elements if q.stop is None else q.stop
+            for key, value in (("start", q.start), ("stop", stop)):
+                if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                    raise SceneError(f"{name}.{key} must be a whole element number, got {value!r}")
+            if not 0 <= q.start < stop <= n_elements:
+                raise SceneError(f"{name}: elements start = {q.start} to stop = {stop} (exclusive) "
+                                 f"must satisfy 0 <= start < stop <= {n_elements}")
         seen: dict[tuple[int, str], int] = {}
         for i, wall in enumerate(walls):
-            node = _node(f"wall[{i}].node", wall.node, n)
+            at = node(f"wall[{i}]", wall.bar, wall.node)
             _number(f"wall[{i}].gap", wall.gap, minimum=0.0)
             if wall.side not in WALL_SIDES:
                 raise SceneError(f"wall[{i}].side must be '+' or '-', got {wall.side!r}")
-            if node in held:
+            if at in held:
                 raise SceneError(
-                    f"wall[{i}].node = {node} is support[{held[node]}]: a wall there carries no force"
+                    f"wall[{i}].node = {wall.node} is support[{held[at]}]: a wall there carries no force"
                 )
-            if (node, wall.side) in seen:
+            if (at, wall.side) in seen:
                 raise SceneError(
-                    f"wall[{i}] repeats wall[{seen[node, wall.side]}] (node {node}, side "
+                    f"wall[{i}] repeats wall[{seen[at, wall.side]}] (node {wall.node}, side "
                     f"{wall.side!r}): keep the one with the smaller gap"
                 )
-            seen[node, wall.side] = i
+            seen[at, wall.side] = i
+        pairs: dict[tuple[int, int], int] = {}
+        for i, c in enumerate(contacts):
+            a = node(f"contact[{i}]", c.bar_a, c.node_a, suffix="_a")
+            b = node(f"contact[{i}]", c.bar_b, c.node_b, suffix="_b")
+            _number(f"contact[{i}].gap", c.gap, minimum=0.0)
+            if a == b:
+                raise SceneError(f"contact[{i}]: node_a and node_b are the same node")
+            if a in held and b in held:
+                raise SceneError(f"contact[{i}]: both nodes are supports; the contact carries no force")
+            if (a, b) in pairs:
+                raise SceneError(f"contact[{i}] repeats contact[{pairs[a, b]}]: keep the one with "
+                                 "the smaller gap")
+            pairs[a, b] = i
         object.__setattr__(self, "supports", supports)
         object.__setattr__(self, "loads", loads)
         object.__setattr__(self, "walls", walls)
+        object.__setattr__(self, "distributed", distributed)
+        object.__setattr__(self, "contacts", contacts)
+
+    @staticmethod
+    def _node_checker(bars: tuple[Bar, ...]):
+        """A function (field name, bar, node) -> global node number, or a SceneError."""
+        offsets = np.concatenate(([0], np.cumsum([b.n_nodes for b in bars])))
+
+        def node(name: str, bar: Any, value: Any, suffix: str = "") -> int:
+            b = _bar(f"{name}.bar{suffix}", bar, len(bars))
+            owner = "the bar" if len(bars) == 1 else f"bar[{b}]"
+            return int(offsets[b]) + _node(f"{name}.node{suffix}", value, bars[b].n_nodes, owner)
+
+        return node
+
+    @property
+    def bars(self) -> tuple[Bar, ...]:
+        """Every bar of the scene, in order (a tuple even when there is one)."""
+        return (self.bar,) if isinstance(self.bar, Bar) else self.bar
+
+    @cached_property
+    def node_offsets(self) -> np.ndarray:
+        """Global number of each bar's node 0, and the total node count last."""
+        return np.concatenate(([0], np.cumsum([b.n_nodes for b in self.bars])))
+
+    def global_node(self, bar: int, node: int) -> int:
+        """The number of node ``node`` of bar ``bar`` in the scene's one node sequence."""
+        return int(self.node_offsets[bar]) + int(node)
 
     @property
     def n_nodes(self) -> int:
-        return self.bar.n_nodes
+        return int(self.node_offsets[-1])
+
+    @property
+    def n_elements(self) -> int:
+        return self.n_nodes - len(self.bars)
+
+    @property
+    def n_contacts(self) -> int:
+        """Contact rows: one per wall, then one per bar contact."""
+        return len(self.walls) + len(self.contacts)
+
+    @cached_property
+    def junctions(self) -> np.ndarray:
+        """Slots between consecutive global nodes that no element joins (a bar's last node
+        and the next bar's first); slot j is between nodes j and j + 1."""
+        return self.node_offsets[1:-1] - 1
+
+    def _per_element(self, values: list[np.ndarray]) -> np.ndarray:
+        array = np.concatenate(values) if len(values) > 1 else np.asarray(values[0])
+        array.flags.writeable = False
+        return array
+
+    @cached_property
+    def stiffness(self) -> np.ndarray:
+        """E·A/L of every element of every bar, bar after bar (N/m)."""
+        return self._per_element([b.stiffness for b in self.bars])
+
+    @cached_property
+    def areas(self) -> np.ndarray:
+        """Area of every element of every bar, bar after bar (m²)."""
+        return self._per_element([b.areas for b in self.bars])
+
+    @cached_property
+    def yield_stress(self) -> np.ndarray | None:
+        """Yield stress of every element (Pa; NaN on a bar without one), None if no bar has one."""
+        if all(b.yield_stress is None for b in self.bars):
+            return None
+        return self._per_element([np.full(b.n_elements, np.nan if b.yield_stress is None
+                                          else b.yield_stress) for b in self.bars])
+
+    @cached_property
+    def slot_stiffness(self) -> np.ndarray:
+        """Stiffness between global nodes j and j + 1 (N/m): the element's, 0 at a junction."""
+        if len(self.bars) == 1:
+            return self.stiffness
+        slots = np.insert(self.stiffness, self.junctions - np.arange(self.junctions.size), 0.0)
+        slots.flags.writeable = False
+        return slots
+
+    @cached_property
+    def node_x(self) -> np.ndarray:
+        """x of every node (m) for drawing: each bar starts where the one before ends."""
+        xs, start = [], 0.0
+        for b in self.bars:
+            xs.append(start + b.node_x)
+            start = float(xs[-1][-1])
+        return np.concatenate(xs)
+
+    @cached_property
+    def support_nodes(self) -> np.ndarray:
+        """Global node of each support, in scene order."""
+        return np.array([self.global_node(s.bar, s.node) for s in self.supports], dtype=np.intp)
+
+    @cached_property
+    def load_nodes(self) -> np.ndarray:
+        """Global node of each point load, in scene order."""
+        return np.array([self.global_node(p.bar, p.node) for p in self.loads], dtype=np.intp)
+
+    @cached_property
+    def contact_rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The contact rows C u <= g in global node numbering as (row, node, coefficient) of
+        each nonzero, and g: a wall is sign·u_node <= gap, a bar contact u_a − u_b <= gap."""
+        walls, contacts = self.walls, self.contacts
+        n_walls = len(walls)
+        offsets = self.node_offsets
+        wall_nodes = np.array([offsets[w.bar] + w.node for w in walls], dtype=np.intp)
+        signs = np.array([1.0 if w.side == "+" else -1.0 for w in walls])
+        a = np.array([offsets[c.bar_a] + c.node_a for c in contacts], dtype=np.intp)
+        b = np.array([offsets[c.bar_b] + c.node_b for c in contacts], dtype=np.intp)
+        rows = np.concatenate((np.arange(n_walls), n_walls + np.arange(a.size),
+                               n_walls + np.arange(b.size))).astype(np.intp)
+        nodes = np.concatenate((wall_nodes, a, b)).astype(np.intp)
+        values = np.concatenate((signs, np.ones(a.size), -np.ones(b.size)))
+        gaps = np.array([w.gap for w in walls] + [c.gap for c in contacts], dtype=float)
+        for array in (rows, nodes, values, gaps):
+            array.flags.writeable = False
+        return rows, nodes, values, gaps
+
+    @property
+    def gaps(self) -> np.ndarray:
+        """g: the gap of every contact row (m)."""
+        return self.contact_rows[3]
 
     def nodal_loads(self) -> np.ndarray:
-        """The point loads summed per node (N), length n_nodes."""
+        """The point loads and the distributed loads' consistent nodal forces summed per global
+        node (N), length n_nodes."""
         p = np.zeros(self.n_nodes)
-        for load in self.loads:
-            p[load.node] += float(load.force)
+        np.add.at(p, self.load_nodes, np.array([q.force for q in self.loads], dtype=float))
+        for q in self.distributed:
+            bar = self.bars[q.bar]
+            stop = bar.n_elements if q.stop is None else q.stop
+            half = 0.5 * float(q.intensity) * bar.lengths[q.start:stop]
+            first = self.global_node(q.bar, q.start)
+            p[first:first + half.size] += half
+            p[first + 1:first + 1 + half.size] += half
         return p
 
-    def with_loads(self, loads: tuple[Load, ...]) -> Scene:
-        """The same scene with other loads."""
-        return Scene(self.bar, self.supports, tuple(loads), self.walls, self.name)
+    def load_point(self) -> int:
+        """The global node whose displacement a load path follows: the first point load's
+        node, else the node with the largest nodal load."""
+        if self.loads:
+            return int(self.load_nodes[0])
+        return int(np.abs(self.nodal_loads()).argmax())
+
+    def with_loads(self, loads: tuple[Load, ...],
+                   distributed: tuple[DistributedLoad, ...] | None = None) -> Scene:
+        """The same scene with other loads (point, and distributed when given)."""
+        return replace(self, loads=tuple(loads),
+                       distributed=self.distributed if distributed is None else tuple(distributed))
+
+    def scaled_loads(self, factor: float) -> Scene:
+        """The same scene with every load (point and distributed) times ``factor``."""
+        factor = _number("load factor", factor)
+        return self.with_loads(tuple(replace(p, force=factor * p.force) for p in self.loads),
+                               tuple(replace(q, intensity=factor * q.intensity)
+                                     for q in self.distributed))
 
     def with_walls(self, walls: tuple[Wall, ...]) -> Scene:
         """The same scene with other walls."""
-        return Scene(self.bar, self.supports, self.loads, tuple(walls), self.name)
+        return replace(self, walls=tuple(walls))
+
+
+def wall_at_every_node(scene: Scene, gap: Any, side: WallSide = "+", bar: int = 0) -> Scene:
+    """The scene with a wall at every node of bar ``bar`` that is not a support (the discrete
+    obstacle problem): ``gap`` one value (m) or one per node of the bar (supports' ignored)."""
+    b = _bar("obstacle.bar", bar, len(scene.bars))
+    n = scene.bars[b].n_nodes
+    gaps = np.broadcast_to(np.asarray(gap, dtype=float), (n,)) if np.ndim(gap) == 0 else \
+        np.asarray(gap, dtype=float)
+    if gaps.shape != (n,):
+        raise SceneError(f"obstacle.gap must be one value or one per node of bar[{b}] ({n}), "
+                         f"got {np.size(gap)}")
+    held = {s.node for s in scene.supports if s.bar == b}
+    walls = tuple(Wall(i, float(gaps[i]), side, b) for i in range(n) if i not in held)
+    return scene.with_walls(scene.walls + walls)
 
 
 def _as(kind: type, value: Any, name: str) -> Any:
@@ -330,17 +571,25 @@ def seed_scene(elements: int = SEED_ELEMENTS, area_rule: AreaRule = "midpoint") 
     )
 
 
-def needed_nodes(scene: Scene) -> np.ndarray:
-    """The nodes a scene needs: both ends, supports, loads and walls (sorted node numbers)."""
-    nodes = {0, scene.n_nodes - 1}
-    nodes.update(s.node for s in scene.supports)
-    nodes.update(p.node for p in scene.loads)
-    nodes.update(w.node for w in scene.walls)
+def needed_nodes(scene: Scene, bar: int = 0) -> np.ndarray:
+    """The nodes bar ``bar`` needs (sorted node numbers of that bar): both ends, supports,
+    loads, walls and bar-contact ends, and every node under a distributed load (a merged
+    element of varying EA would spread the load differently)."""
+    nodes = {0, scene.bars[bar].n_nodes - 1}
+    nodes.update(s.node for s in scene.supports if s.bar == bar)
+    nodes.update(p.node for p in scene.loads if p.bar == bar)
+    nodes.update(w.node for w in scene.walls if w.bar == bar)
+    nodes.update(c.node_a for c in scene.contacts if c.bar_a == bar)
+    nodes.update(c.node_b for c in scene.contacts if c.bar_b == bar)
+    for q in scene.distributed:
+        if q.bar == bar:
+            nodes.update(range(q.start, (scene.bars[bar].n_elements if q.stop is None
+                                         else q.stop) + 1))
     return np.array(sorted(nodes))
 
 
 def minimal(scene: Scene) -> Scene:
-    """The same scene with nodes only where it needs them (:func:`needed_nodes`).
+    """The same scene with nodes only where it needs them (:func:`needed_nodes`), bar by bar.
 
     The elements between two kept nodes become one element with their series flexibility
     Σ L/(EA), so displacements at the kept nodes, contact forces, reactions and element forces
@@ -349,31 +598,42 @@ def minimal(scene: Scene) -> Scene:
     ``area_rule="exact"`` that is the exact cone's, and one element per segment reproduces the
     continuum answer.
     """
-    kept = needed_nodes(scene)
-    new_number = np.full(scene.n_nodes, -1)
-    new_number[kept] = np.arange(kept.size)
-    bar = scene.bar
-    flexibility = np.concatenate(([0.0], np.cumsum(1.0 / bar.stiffness)))[kept]
-    x = bar.node_x[kept]
-    lengths = np.diff(x)
-    modulus = bar.youngs_modulus[np.searchsorted(bar.node_x, x[:-1], side="right") - 1]
-    areas = lengths / (modulus * np.diff(flexibility))  # E A / L = 1 / Σ L/(EA)
-    merged = Bar(lengths, areas, modulus, bar.yield_stress)
+    bars, numbers = [], []
+    for b, bar in enumerate(scene.bars):
+        kept = needed_nodes(scene, b)
+        new_number = np.full(bar.n_nodes, -1)
+        new_number[kept] = np.arange(kept.size)
+        numbers.append(new_number)
+        flexibility = bar.compliance_from_node_0[kept]
+        x = bar.node_x[kept]
+        lengths = np.diff(x)
+        modulus = bar.youngs_modulus[np.searchsorted(bar.node_x, x[:-1], side="right") - 1]
+        areas = lengths / (modulus * np.diff(flexibility))  # E A / L = 1 / Σ L/(EA)
+        bars.append(Bar(lengths, areas, modulus, bar.yield_stress))
+    def element(b: int, e: int | None) -> int | None:
+        # a distributed load's elements keep all their nodes: element e starts at node e
+        return None if e is None else int(numbers[b][e])
+
     return Scene(
-        merged,
-        tuple(Support(int(new_number[s.node])) for s in scene.supports),
-        tuple(Load(int(new_number[p.node]), p.force) for p in scene.loads),
-        tuple(Wall(int(new_number[w.node]), w.gap, w.side) for w in scene.walls),
+        tuple(bars),
+        tuple(replace(s, node=int(numbers[s.bar][s.node])) for s in scene.supports),
+        tuple(replace(p, node=int(numbers[p.bar][p.node])) for p in scene.loads),
+        tuple(replace(w, node=int(numbers[w.bar][w.node])) for w in scene.walls),
         name=f"{scene.name} (minimal mesh)",
+        distributed=tuple(replace(q, start=element(q.bar, q.start), stop=element(q.bar, q.stop))
+                          for q in scene.distributed),
+        contacts=tuple(replace(c, node_a=int(numbers[c.bar_a][c.node_a]),
+                               node_b=int(numbers[c.bar_b][c.node_b])) for c in scene.contacts),
     )
 
 
 # ---------------------------------------------------------------------------------------------
 # TOML
 
-_TOP_KEYS = {"name", "material", "bar", "support", "load", "wall"}
+_TOP_KEYS = {"name", "material", "bar", "support", "load", "wall", "distributed_load", "contact",
+             "obstacle"}
 _MATERIAL_KEYS = {"youngs_modulus", "yield_stress"}
-_BAR_KEYS = {"length", "lengths", "elements", "section", "areas"}
+_BAR_KEYS = {"length", "lengths", "elements", "section", "areas", "material"}
 _SECTION_KEYS = {"shape", "diameter_start", "diameter_end", "area_rule"}
 
 
@@ -396,48 +656,90 @@ def _array_of_tables(data: dict, key: str, allowed: set[str], required: set[str]
     return [_table(item, f"{key}[{i}]", allowed, required) for i, item in enumerate(items)]
 
 
-def scene_from_dict(data: dict, name: str = "scene") -> Scene:
-    """Build a scene from the parsed TOML structure documented in the README."""
-    data = _table(data, "scene", _TOP_KEYS, {"material", "bar"})
-    material = _table(data["material"], "material", _MATERIAL_KEYS, {"youngs_modulus"})
-    modulus = _number("material.youngs_modulus", material["youngs_modulus"], minimum=0.0, strict=True)
+def _bar_from_dict(bar_data: Any, name: str, material: dict | None) -> Bar:
+    """One bar from its TOML table; its own ``material`` table, else the scene's."""
+    bar_data = _table(bar_data, name, _BAR_KEYS)
+    if "material" in bar_data:
+        material = _table(bar_data["material"], f"{name}.material", _MATERIAL_KEYS,
+                          {"youngs_modulus"})
+        where = f"{name}.material"
+    else:
+        where = "material"
+    if material is None:
+        raise SceneError(f"{name}: no material; give [material] or {name}.material")
+    modulus = _number(f"{where}.youngs_modulus", material["youngs_modulus"], minimum=0.0,
+                      strict=True)
     yield_stress = material.get("yield_stress")
-    bar_data = _table(data["bar"], "bar", _BAR_KEYS)
     if "areas" in bar_data:
         if "section" in bar_data or "elements" in bar_data:
-            raise SceneError("bar: give either areas or elements + section, not both")
+            raise SceneError(f"{name}: give either areas or elements + section, not both")
         if not isinstance(bar_data["areas"], list):
-            raise SceneError(f"bar.areas must be a list of numbers, got {bar_data['areas']!r}")
-        bar = Bar.from_areas(
+            raise SceneError(f"{name}.areas must be a list of numbers, got {bar_data['areas']!r}")
+        return Bar.from_areas(
             bar_data["areas"], modulus, length=bar_data.get("length"),
             lengths=bar_data.get("lengths"), yield_stress=yield_stress,
         )
+    for key in ("length", "elements", "section"):
+        if key not in bar_data:
+            raise SceneError(f"{name}.{key} is missing (or give {name}.areas)")
+    if "lengths" in bar_data:
+        raise SceneError(f"{name}.lengths goes with {name}.areas; with {name}.section the "
+                         f"elements are equal ({name}.length / {name}.elements)")
+    section = _table(bar_data["section"], f"{name}.section", _SECTION_KEYS,
+                     {"shape", "diameter_start", "diameter_end"})
+    if section["shape"] != "circle":
+        raise SceneError(f"{name}.section.shape must be 'circle', got {section['shape']!r}")
+    return Bar.tapered_circle(
+        bar_data["length"], bar_data["elements"], section["diameter_start"],
+        section["diameter_end"], modulus, area_rule=section.get("area_rule", "midpoint"),
+        yield_stress=yield_stress,
+    )
+
+
+def scene_from_dict(data: dict, name: str = "scene") -> Scene:
+    """Build a scene from the parsed TOML structure documented in the README: one ``[bar]``
+    or several ``[[bar]]`` (each may have its own ``material`` table)."""
+    data = _table(data, "scene", _TOP_KEYS, {"bar"})
+    material = None
+    if "material" in data:
+        material = _table(data["material"], "material", _MATERIAL_KEYS, {"youngs_modulus"})
+    if isinstance(data["bar"], list):
+        if not data["bar"]:
+            raise SceneError("bar: [[bar]] is empty; give at least one bar")
+        bars: Bar | tuple[Bar, ...] = tuple(_bar_from_dict(b, f"bar[{i}]", material)
+                                            for i, b in enumerate(data["bar"]))
     else:
-        for key in ("length", "elements", "section"):
-            if key not in bar_data:
-                raise SceneError(f"bar.{key} is missing (or give bar.areas)")
-        if "lengths" in bar_data:
-            raise SceneError("bar.lengths goes with bar.areas; with bar.section the elements are "
-                             "equal (bar.length / bar.elements)")
-        section = _table(bar_data["section"], "bar.section", _SECTION_KEYS,
-                         {"shape", "diameter_start", "diameter_end"})
-        if section["shape"] != "circle":
-            raise SceneError(f"bar.section.shape must be 'circle', got {section['shape']!r}")
-        bar = Bar.tapered_circle(
-            bar_data["length"], bar_data["elements"], section["diameter_start"],
-            section["diameter_end"], modulus, area_rule=section.get("area_rule", "midpoint"),
-            yield_stress=yield_stress,
-        )
-    supports = tuple(Support(s["node"]) for s in _array_of_tables(data, "support", {"node"}, {"node"}))
+        bars = _bar_from_dict(data["bar"], "bar", material)
+    supports = tuple(Support(s["node"], s.get("bar", 0))
+                     for s in _array_of_tables(data, "support", {"node", "bar"}, {"node"}))
     loads = tuple(
-        Load(s["node"], s["force"])
-        for s in _array_of_tables(data, "load", {"node", "force"}, {"node", "force"})
+        Load(s["node"], s["force"], s.get("bar", 0))
+        for s in _array_of_tables(data, "load", {"node", "force", "bar"}, {"node", "force"})
     )
     walls = tuple(
-        Wall(s["node"], s["gap"], s.get("side", "+"))
-        for s in _array_of_tables(data, "wall", {"node", "gap", "side"}, {"node", "gap"})
+        Wall(s["node"], s["gap"], s.get("side", "+"), s.get("bar", 0))
+        for s in _array_of_tables(data, "wall", {"node", "gap", "side", "bar"}, {"node", "gap"})
     )
-    return Scene(bar, supports, loads, walls, name=str(data.get("name", name)))
+    distributed = tuple(
+        DistributedLoad(q["intensity"], q.get("bar", 0), q.get("start", 0), q.get("stop"))
+        for q in _array_of_tables(data, "distributed_load", {"intensity", "bar", "start", "stop"},
+                                  {"intensity"})
+    )
+    contacts = tuple(
+        BarContact(c["bar_a"], c["node_a"], c["bar_b"], c["node_b"], c["gap"])
+        for c in _array_of_tables(data, "contact", {"bar_a", "node_a", "bar_b", "node_b", "gap"},
+                                  {"bar_a", "node_a", "bar_b", "node_b", "gap"})
+    )
+    scene = Scene(bars, supports, loads, walls, name=str(data.get("name", name)),
+                  distributed=distributed, contacts=contacts)
+    for i, o in enumerate(_array_of_tables(data, "obstacle", {"gap", "side", "bar"}, {"gap"})):
+        gap = o["gap"]
+        if isinstance(gap, list):
+            gap = [_number(f"obstacle[{i}].gap[{j}]", g, minimum=0.0) for j, g in enumerate(gap)]
+        else:
+            gap = _number(f"obstacle[{i}].gap", gap, minimum=0.0)
+        scene = wall_at_every_node(scene, gap, o.get("side", "+"), o.get("bar", 0))
+    return scene
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -457,27 +759,37 @@ def load_scene(path: str | Path) -> Scene:
 
 
 def scene_to_toml(scene: Scene) -> str:
-    """The scene as TOML text that :func:`load_scene` reads back (explicit areas and lengths)."""
-    bar = scene.bar
-    moduli = np.unique(bar.youngs_modulus)
-    if moduli.size != 1:
-        raise SceneError("scene_to_toml: a bar with several moduli has no TOML form yet")
-    lines = [f"name = {json.dumps(scene.name)}", "", "[material]",  # JSON strings are TOML
-             f"youngs_modulus = {float(moduli[0])!r}"]
-    if bar.yield_stress is not None:
-        lines.append(f"yield_stress = {bar.yield_stress!r}")
-    lines += ["", "[bar]", f"areas = {[float(a) for a in bar.areas]!r}",
-              f"lengths = {[float(v) for v in bar.lengths]!r}"]
+    """The scene as TOML text that :func:`load_scene` reads back (explicit areas and lengths;
+    an obstacle as its walls)."""
+    lines = [f"name = {json.dumps(scene.name)}"]  # JSON strings are TOML
+    several = len(scene.bars) > 1
+    for i, bar in enumerate(scene.bars):
+        moduli = np.unique(bar.youngs_modulus)
+        if moduli.size != 1:
+            raise SceneError(f"scene_to_toml: bar[{i}] has several moduli, which have no TOML form")
+        lines += ["", "[[bar]]" if several else "[bar]", f"areas = {[float(a) for a in bar.areas]!r}",
+                  f"lengths = {[float(v) for v in bar.lengths]!r}",
+                  "", "[bar.material]", f"youngs_modulus = {float(moduli[0])!r}"]
+        if bar.yield_stress is not None:
+            lines.append(f"yield_stress = {bar.yield_stress!r}")
     for s in scene.supports:
-        lines += ["", "[[support]]", f"node = {s.node}"]
+        lines += ["", "[[support]]", f"bar = {s.bar}", f"node = {s.node}"]
     for p in scene.loads:
-        lines += ["", "[[load]]", f"node = {p.node}", f"force = {float(p.force)!r}"]
+        lines += ["", "[[load]]", f"bar = {p.bar}", f"node = {p.node}", f"force = {float(p.force)!r}"]
+    for q in scene.distributed:
+        lines += ["", "[[distributed_load]]", f"bar = {q.bar}", f"intensity = {float(q.intensity)!r}",
+                  f"start = {q.start}"] + ([] if q.stop is None else [f"stop = {q.stop}"])
     for w in scene.walls:
-        lines += ["", "[[wall]]", f"node = {w.node}", f"gap = {float(w.gap)!r}", f'side = "{w.side}"']
+        lines += ["", "[[wall]]", f"bar = {w.bar}", f"node = {w.node}", f"gap = {float(w.gap)!r}",
+                  f'side = "{w.side}"']
+    for c in scene.contacts:
+        lines += ["", "[[contact]]", f"bar_a = {c.bar_a}", f"node_a = {c.node_a}",
+                  f"bar_b = {c.bar_b}", f"node_b = {c.node_b}", f"gap = {float(c.gap)!r}"]
     return "\n".join(lines) + "\n"
 
 
 __all__ = [
-    "AREA_RULES", "Bar", "Load", "Scene", "Support", "Wall", "circle_areas", "load_scene",
-    "minimal", "needed_nodes", "scene_from_dict", "scene_to_toml", "seed_scene",
+    "AREA_RULES", "Bar", "BarContact", "DistributedLoad", "Load", "Scene", "Support", "Wall",
+    "circle_areas", "load_scene", "minimal", "needed_nodes", "scene_from_dict", "scene_to_toml",
+    "seed_scene", "wall_at_every_node",
 ]

@@ -63,12 +63,13 @@ def check_equality_is_possible(scene: Scene) -> None:
     would hold it at +gap and -gap at once."""
     sides: dict[int, int] = {}
     for i, wall in enumerate(scene.walls):
-        if wall.node in sides:
+        node = scene.global_node(wall.bar, wall.node)
+        if node in sides:
             raise OptionError(
-                f"contact='equality' cannot hold node {wall.node} at wall[{sides[wall.node]}] and "
+                f"contact='equality' cannot hold node {wall.node} at wall[{sides[node]}] and "
                 f"wall[{i}] at once; use contact='inequality'"
             )
-        sides[wall.node] = i
+        sides[node] = i
 
 
 def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "inequality",

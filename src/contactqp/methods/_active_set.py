@@ -12,11 +12,11 @@ Step = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 Update = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
-def default_max_iterations(n_walls: int) -> int:
-    return 50 + 2 * n_walls
+def default_max_iterations(n_rows: int) -> int:
+    return 50 + 2 * n_rows
 
 
-def active_set_loop(n_walls: int, step: Step, update: Update, *, method: str,
+def active_set_loop(n_rows: int, step: Step, update: Update, *, method: str,
                     max_iterations: int | None = None,
                     start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, int]:
     """Iterate ``active -> step(active) = (u, λ) -> update(active, u, λ)`` to a fixed point.
@@ -25,8 +25,8 @@ def active_set_loop(n_walls: int, step: Step, update: Update, *, method: str,
     terminates: a set that comes back (a cycle) or more than ``max_iterations`` steps is a
     SolverError that says so.
     """
-    limit = default_max_iterations(n_walls) if max_iterations is None else int(max_iterations)
-    active = np.zeros(n_walls, dtype=bool) if start is None else np.asarray(start, dtype=bool)
+    limit = default_max_iterations(n_rows) if max_iterations is None else int(max_iterations)
+    active = np.zeros(n_rows, dtype=bool) if start is None else np.asarray(start, dtype=bool)
     seen = {active.tobytes()}
     for iteration in range(1, limit + 1):
         u, lam = step(active)

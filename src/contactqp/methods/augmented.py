@@ -47,7 +47,7 @@ def solve_augmented(model: Model, contact: str, *, penalty: float | None = None,
     eps = default_penalty(model) if penalty is None else penalty_value(penalty)
     K, P, C, g = model.K, model.P, model.C, model.g
     unilateral = contact == "inequality"
-    lam = np.zeros(model.n_walls)
+    lam = np.zeros(model.n_contacts)
     inner_solves = 0
 
     def step(active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -65,10 +65,10 @@ def solve_augmented(model: Model, contact: str, *, penalty: float | None = None,
     previous = np.inf
     for iteration in range(1, max_iterations + 1):
         if unilateral:
-            u, new_lam, _ = active_set_loop(model.n_walls, step, update, method="augmented",
+            u, new_lam, _ = active_set_loop(model.n_contacts, step, update, method="augmented",
                                             start=lam > 0.0)
         else:
-            u, new_lam = step(np.ones(model.n_walls, dtype=bool))
+            u, new_lam = step(np.ones(model.n_contacts, dtype=bool))
         change = float(np.abs(new_lam - lam).max(initial=0.0))
         scale = max(float(np.abs(new_lam).max(initial=0.0)), float(np.abs(P).max(initial=0.0)))
         lam = new_lam

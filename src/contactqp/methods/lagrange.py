@@ -52,7 +52,7 @@ def solve_strain_saddle_point(model: Model, active: np.ndarray) -> tuple[np.ndar
     which makes it banded for a chain. Returns (u, N, λ of the active walls).
     """
     B = elongation_rows(model)
-    k = model.scene.bar.stiffness
+    k = model.scene.stiffness
     n, m = model.n_free, k.size
     C = model.C[active]
     hessian = sp.diags_array(np.concatenate((np.zeros(n), k)))
@@ -78,14 +78,14 @@ def solve_lagrange(model: Model, contact: str, *, max_iterations: int | None = N
             element_force[:] = [forces]
         else:
             u, lam_active = solve_saddle_point(K, P, C[active], g[active])
-        lam = np.zeros(model.n_walls)
+        lam = np.zeros(model.n_contacts)
         lam[active] = lam_active
         return u, lam
 
     if formulation not in ("full", "strain"):
         raise OptionError(f"lagrange formulation must be 'full' or 'strain'; got {formulation!r}")
     if contact == "equality":
-        u, lam = step(np.ones(model.n_walls, dtype=bool))
+        u, lam = step(np.ones(model.n_contacts, dtype=bool))
         return Solution(u, lam, solver="lagrange", info=_strain_info(element_force))
 
     def update(active: np.ndarray, u: np.ndarray, lam: np.ndarray) -> np.ndarray:
@@ -96,7 +96,7 @@ def solve_lagrange(model: Model, contact: str, *, max_iterations: int | None = N
         force_tol = DECISION_RTOL * max(np.abs(P).max(initial=0.0), np.abs(lam).max(initial=0.0))
         return np.where(active, lam > -force_tol, pen > disp_tol)
 
-    u, lam, iterations = active_set_loop(model.n_walls, step, update, method="lagrange",
+    u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="lagrange",
                                          max_iterations=max_iterations)
     return Solution(u, lam, solver="lagrange", iterations=iterations,
                     info=_strain_info(element_force))

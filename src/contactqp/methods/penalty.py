@@ -43,12 +43,12 @@ def solve_penalty(model: Model, contact: str, *, penalty: float = DEFAULT_PENALT
         return u, lam
 
     if contact == "equality":
-        u, lam = step(np.ones(model.n_walls, dtype=bool))
+        u, lam = step(np.ones(model.n_contacts, dtype=bool))
         return Solution(u, lam, solver="penalty")
 
     def update(active: np.ndarray, u: np.ndarray, lam: np.ndarray) -> np.ndarray:
         return C @ u - g > 0.0
 
-    u, lam, iterations = active_set_loop(model.n_walls, step, update, method="penalty",
+    u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="penalty",
                                          max_iterations=max_iterations)
     return Solution(u, lam, solver="penalty", iterations=iterations)

@@ -207,13 +207,13 @@ def _strain_qp(model: Model, contact: str, U: float, F: float) -> QPProblem:
     ½ Σ k_e e² (k_e = EA/L of each element), tie rows B u − e = 0 (:func:`elongation_rows`).
     The Hessian is diagonal; the bar's ill-conditioning (cond K ~ n²) moves into the rows."""
     B = elongation_rows(model)
-    k = model.scene.bar.stiffness / (F / U)
+    k = model.scene.stiffness / (F / U)
     n, m = model.n_free, k.size
     identity = sp.eye_array(m, format="csc")
     return QPProblem(
         K=sp.csc_array(sp.diags_array(np.concatenate((np.zeros(n), k))).tocsc()),
         q=np.concatenate((-model.P / F, np.zeros(m))),
-        C=sp.csc_array(sp.hstack((model.C, sp.csr_array((model.n_walls, m))), format="csc")),
+        C=sp.csc_array(sp.hstack((model.C, sp.csr_array((model.n_contacts, m))), format="csc")),
         g=model.g / U, contact=contact, displacement_scale=U, force_scale=F,
         ties=sp.csc_array(sp.hstack((B, -identity), format="csc")),
     )
