@@ -1,5 +1,5 @@
 """Command line: ``contactqp`` (every method on the default scene), ``solve``, ``penalty-sweep``,
-``solvers``. Bad input ends with one line on stderr naming the field and the value, exit 2."""
+``curve``, ``solvers``. Bad input ends with one line on stderr naming the field and the value, exit 2."""
 
 from __future__ import annotations
 
@@ -154,6 +154,37 @@ def command_penalty_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def command_curve(args: argparse.Namespace) -> int:
+    from contactqp.curve import first_contact_factor, load_path
+
+    scene = _scene(args.scene)
+    path = load_path(scene, steps=args.steps)
+    if args.json:
+        print(json.dumps(path.to_dict(), indent=2))
+        return 0
+    kink = first_contact_factor(scene)
+    print(f"load path, {scene.name}: displacement of node {path.load_node} (mm) against the "
+          f"load factor; first contact closes at t = {kink:.6g} (closed form)")
+    names = list(path.methods)
+    print(f"{'t':>7}  " + "  ".join(f"{n:>14}" for n in names))
+    for i, t in enumerate(path.load_factor):
+        cells = []
+        for n in names:
+            m = path.methods[n]
+            mark = "" if m.verified[i] and m.physical[i] else "!"
+            cells.append(f"{1e3 * m.load_point_displacement[i]:13.6g}{mark or ' '}")
+        print(f"{t:7.4f}  " + "  ".join(cells))
+    if any(not (m.verified.all() and m.physical.all()) for m in path.methods.values()):
+        print("! the step's Result failed its check or a wall pulls (equality contact before the "
+              "wall is reached; a soft penalty's penetration)")
+    if not args.no_charts:
+        from contactqp import plot
+
+        Path(args.out).mkdir(parents=True, exist_ok=True)
+        print(f"chart: {plot.save(plot.plot_load_path(path, kink), Path(args.out) / 'load_path.png')}")
+    return 0
+
+
 def command_solvers(args: argparse.Namespace) -> int:
     from contactqp.methods.qp import DEFAULT_BACKEND, available_qp_solvers
 
@@ -206,6 +237,11 @@ def parser() -> argparse.ArgumentParser:
                                  "penetration and contact force for ε = 1, 1e5, 1e6 … 1e20")
     sweep_parser.add_argument("--contact", default="inequality", choices=CONTACT_KINDS)
     sweep_parser.add_argument("--json", action="store_true", help="print the sweep as JSON")
+    curve_parser = scene_command("curve", command_curve,
+                                 "force-displacement curve: the loads stepped from 0 to 1")
+    curve_parser.add_argument("--steps", type=int, default=21,
+                              help="load factors from 0 to 1, both included (default %(default)s)")
+    curve_parser.add_argument("--json", action="store_true", help="print the curves as JSON")
     commands.add_parser("solvers", help="installed QP backends and solvers, and how to add more"
                         ).set_defaults(handler=command_solvers)
     return top

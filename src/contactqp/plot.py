@@ -7,6 +7,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
+from contactqp.curve import LoadPath
 from contactqp.result import Result
 from contactqp.studies import MeshConvergence, PenaltySweep
 
@@ -100,6 +101,24 @@ def plot_mesh_convergence(study: MeshConvergence, ax: Axes | None = None) -> Axe
     ax.set_xlabel("elements")
     ax.set_ylabel("relative contact-force error vs the continuum")
     ax.set_title("tapered bar: midpoint areas O(h²), exact areas exact")
+    ax.legend(fontsize=8)
+    return ax
+
+
+def plot_load_path(path: LoadPath, kink: float | None = None, ax: Axes | None = None) -> Axes:
+    """Displacement of the load point against the load factor, one line per method, with the
+    closed-form load factor ``kink`` at which the first contact closes (dotted)."""
+    ax = _axes(ax, (7, 4.6))
+    styles = {"lagrange": "k-", "equality": "r--", "penalty": "g-.", "augmented": "c:",
+              "qp": "bx", "soft penalty": "m-"}
+    for name, method in path.methods.items():
+        ax.plot(path.load_factor, 1e3 * method.load_point_displacement,
+                styles.get(name, "o-"), label=name, markersize=5, linewidth=1.5)
+    if kink is not None and np.isfinite(kink):
+        ax.axvline(kink, color="0.5", linestyle=":", label=f"first contact, closed form t = {kink:.4g}")
+    ax.set_xlabel("load factor (× the scene's loads)")
+    ax.set_ylabel(f"displacement of node {path.load_node} (mm)")
+    ax.set_title(f"load path: {path.scene.name}")
     ax.legend(fontsize=8)
     return ax
 

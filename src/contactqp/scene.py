@@ -515,17 +515,27 @@ class Scene:
 
 def wall_at_every_node(scene: Scene, gap: Any, side: WallSide = "+", bar: int = 0) -> Scene:
     """The scene with a wall at every node of bar ``bar`` that is not a support (the discrete
-    obstacle problem): ``gap`` one value (m) or one per node of the bar (supports' ignored)."""
+    obstacle problem): ``gap`` one value (m) or one per node of the bar (supports' ignored).
+    Where the scene has a wall on that side already, the smaller gap is kept (both walls
+    hold, so the nearer one is the constraint)."""
     b = _bar("obstacle.bar", bar, len(scene.bars))
+    if side not in WALL_SIDES:
+        raise SceneError(f"obstacle.side must be '+' or '-', got {side!r}")
     n = scene.bars[b].n_nodes
-    gaps = np.broadcast_to(np.asarray(gap, dtype=float), (n,)) if np.ndim(gap) == 0 else \
-        np.asarray(gap, dtype=float)
+    gaps = np.asarray(gap, dtype=float)
+    if gaps.ndim == 0:
+        gaps = np.full(n, float(gaps))
     if gaps.shape != (n,):
         raise SceneError(f"obstacle.gap must be one value or one per node of bar[{b}] ({n}), "
-                         f"got {np.size(gap)}")
+                         f"got {gaps.size}")
     held = {s.node for s in scene.supports if s.bar == b}
-    walls = tuple(Wall(i, float(gaps[i]), side, b) for i in range(n) if i not in held)
-    return scene.with_walls(scene.walls + walls)
+    existing = {w.node: i for i, w in enumerate(scene.walls) if w.bar == b and w.side == side}
+    walls = list(scene.walls)
+    for node, i in existing.items():
+        walls[i] = replace(walls[i], gap=min(walls[i].gap, float(gaps[node])))
+    walls += [Wall(i, float(gaps[i]), side, b) for i in range(n)
+              if i not in held and i not in existing]
+    return scene.with_walls(tuple(walls))
 
 
 def _as(kind: type, value: Any, name: str) -> Any:

@@ -45,7 +45,8 @@ def takes_strain(method: str) -> bool:
     return "formulation" in inspect.signature(METHODS[method]).parameters
 
 
-def _validate(method: str, contact: str, options: dict[str, Any]) -> Callable[..., Solution]:
+def validate(method: str, contact: str, options: dict[str, Any]) -> Callable[..., Solution]:
+    """The function of ``method``, after checking it, ``contact`` and ``options`` (OptionError)."""
     if method not in METHODS:
         raise OptionError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     contact_kind(contact)
@@ -91,7 +92,7 @@ def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "
     Returns a checked :class:`Result`.
     """
     scene = seed_scene() if scene is None else scene
-    function = _validate(method, contact, options)
+    function = validate(method, contact, options)
     if formulation not in FORMULATIONS:
         raise OptionError(f"formulation must be one of {', '.join(FORMULATIONS)}; "
                           f"got {formulation!r}")

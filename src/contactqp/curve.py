@@ -1,0 +1,167 @@
+"""Load stepping: the force–displacement curve of a scene, per method.
+
+:func:`load_path` scales every load (point and distributed) by factors from 0 to 1 and records,
+per method, the displacement of the load point (:meth:`Scene.load_point`), the contact forces
+and the penetrations, each step a checked Result. Nothing is rebuilt per step that does not
+change with the loads:
+
+- lagrange, penalty and augmented: K is factored once (the condensed formulation,
+  :func:`contactqp.model.condense`); a step solves only the contact unknowns under the scaled
+  free displacements t·K⁻¹P and recovers u = t·K⁻¹P − K⁻¹Cᵀλ from the same factorisation.
+  Above :data:`contactqp.model.CONDENSE_LIMIT` contact nodes each step is a full solve.
+- qp through cvxpy: the parametrised (DPP) problem is built once per structure and re-solved
+  with new load parameters (its Result's ``info["cache"]`` says "hit").
+
+With unilateral contact the curve has a kink where the first contact closes, at the load
+factor t* = g / (C K⁻¹ P) of the first contact to close (:func:`first_contact_factor`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from contactqp.errors import OptionError
+from contactqp.methods import METHODS, solve, validate
+from contactqp.model import CONDENSE_LIMIT, build_model, condense, wall_stiffness
+from contactqp.result import Result, make_result
+from contactqp.scene import Scene, seed_scene
+
+# name -> (method, contact, options): unilateral contact, the textbook equality (which pulls
+# before the wall is reached), the penalty, the augmented Lagrangian and a cvxpy QP; and
+# (curve_methods) a soft penalty whose kink shows
+CURVE_METHODS: dict[str, tuple[str, str, dict[str, Any]]] = {
+    "lagrange": ("lagrange", "inequality", {}),
+    "equality": ("lagrange", "equality", {}),
+    "penalty": ("penalty", "inequality", {}),
+    "augmented": ("augmented", "inequality", {}),
+    "qp": ("qp", "inequality", {"backend": "cvxpy"}),
+}
+DEFAULT_STEPS = 21
+SOFT_PENALTY_PER_STIFFNESS = 1.0  # ε of the soft penalty, times the stiffness the walls see
+
+
+def curve_methods(scene: Scene) -> dict[str, tuple[str, str, dict[str, Any]]]:
+    """:data:`CURVE_METHODS` plus "soft penalty": ε = the stiffness the contacts see
+    (:func:`contactqp.model.wall_stiffness`), so that its penetration, λ/ε, is as large as
+    the displacement the contact prevents and the softer slope past the kink shows."""
+    seen = wall_stiffness(build_model(scene))
+    methods = dict(CURVE_METHODS)
+    if seen is not None:
+        methods["soft penalty"] = ("penalty", "inequality",
+                                   {"penalty": SOFT_PENALTY_PER_STIFFNESS * seen})
+    return methods
+
+
+@dataclass(frozen=True)
+class MethodPath:
+    """One method's curve: per step the load point's displacement (m), one contact force (N)
+    and one penetration (m) per contact row, and whether the step's Result was verified and
+    physical (no wall pulls)."""
+
+    load_point_displacement: np.ndarray
+    contact_force: np.ndarray  # steps x contact rows
+    penetration: np.ndarray  # steps x contact rows
+    verified: np.ndarray
+    physical: np.ndarray
+    results: tuple[Result, ...]
+
+
+@dataclass(frozen=True)
+class LoadPath:
+    """The curves of every method on one scene, on the same load factors."""
+
+    scene: Scene
+    load_factor: np.ndarray
+    load_node: int
+    methods: dict[str, MethodPath]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON form of ``contactqp curve --json``."""
+        def plain(a: np.ndarray) -> list:
+            return np.where(np.isfinite(a), a, np.nan).tolist()
+        return {
+            "scene": self.scene.name, "load_node": self.load_node,
+            "load_factor": self.load_factor.tolist(),
+            "methods": {name: {"load_point_displacement": plain(p.load_point_displacement),
+                               "contact_force": plain(p.contact_force),
+                               "penetration": plain(p.penetration),
+                               "verified": p.verified.tolist(),
+                               "physical": p.physical.tolist()}
+                        for name, p in self.methods.items()},
+        }
+
+
+def first_contact_factor(scene: Scene) -> float:
+    """The load factor at which the first contact closes under the scene's loads, from the
+    contact-free answer t·K⁻¹P: min over rows with (C K⁻¹ P)ᵢ > 0 of gᵢ / (C K⁻¹ P)ᵢ
+    (inf when no load closes a contact)."""
+    model = build_model(scene)
+    closing = model.C @ model.solve_K(model.P)
+    reached = closing > 0.0
+    return float(np.min(model.g[reached] / closing[reached], initial=np.inf))
+
+
+def _factors(steps: Any) -> np.ndarray:
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 2:
+        raise OptionError(f"steps must be a whole number >= 2 (0 and 1 included), got {steps!r}")
+    return np.linspace(0.0, 1.0, int(steps))
+
+
+def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
+              methods: dict[str, tuple[str, str, dict[str, Any]]] | None = None) -> LoadPath:
+    """The force–displacement curve of ``scene`` (default scene when None) at ``steps`` load
+    factors from 0 to 1, for each of ``methods`` (name -> (method, contact, options); default
+    :func:`curve_methods`)."""
+    scene = seed_scene() if scene is None else scene
+    factors = _factors(steps)
+    methods = curve_methods(scene) if methods is None else methods
+    node = scene.load_point()
+    paths = {}
+    for name, (method, contact, options) in methods.items():
+        validate(method, contact, options)
+        if method in ("lagrange", "penalty", "augmented"):
+            results = _stepped(scene, factors, method, contact, options)
+        else:
+            results = [solve(scene.scaled_loads(t), method, contact, **options) for t in factors]
+        paths[name] = MethodPath(
+            np.array([r.u[node] for r in results]),
+            np.array([r.contact_force for r in results]).reshape(factors.size, scene.n_contacts),
+            np.array([r.penetration for r in results]).reshape(factors.size, scene.n_contacts),
+            np.array([r.verified for r in results]), np.array([r.physical for r in results]),
+            tuple(results),
+        )
+    return LoadPath(scene, factors, node, paths)
+
+
+def _stepped(scene: Scene, factors: np.ndarray, method: str, contact: str,
+             options: dict[str, Any]) -> list[Result]:
+    """One explicit method along the load factors, K factored once (condensed)."""
+    model = build_model(scene)
+    if np.unique(model.C.indices).size > CONDENSE_LIMIT:
+        return [solve(scene.scaled_loads(t), method, contact, **options) for t in factors]
+    start = time.perf_counter()
+    condensed = condense(model)
+    factor_time = time.perf_counter() - start
+    function = METHODS[method]
+    results = []
+    for t in factors:
+        start = time.perf_counter()
+        reduced = replace(condensed.model, P=t * condensed.model.P)
+        step = function(reduced, contact, **options)
+        u_free = t * condensed.u0 - condensed.X @ (condensed.model.C.T @ step.contact_force)
+        solved = time.perf_counter()
+        scaled = replace(model, scene=scene.scaled_loads(t), P=t * model.P)
+        results.append(make_result(
+            scaled, replace(step, u_free=u_free), method=method, contact=contact,
+            options={**options, "formulation": "condensed", "load_factor": float(t)},
+            timings={"build": factor_time if t == factors[0] else 0.0, "solve": solved - start},
+        ))
+    return results
+
+
+__all__ = ["CURVE_METHODS", "DEFAULT_STEPS", "curve_methods", "LoadPath", "MethodPath", "first_contact_factor",
+           "load_path"]
