@@ -3,6 +3,7 @@
 Scene → model (K, P, C, g) → method → checked Result. See the README for the conventions.
 """
 
+from contactqp.curve import LoadPath, first_contact_factor, load_path
 from contactqp.errors import (
     ContactqpError,
     OptionError,
@@ -16,6 +17,8 @@ from contactqp.model import Model, build_model
 from contactqp.result import TOLERANCES, Result, Tolerances, check
 from contactqp.scene import (
     Bar,
+    BarContact,
+    DistributedLoad,
     Load,
     Scene,
     Support,
@@ -25,13 +28,16 @@ from contactqp.scene import (
     scene_from_dict,
     scene_to_toml,
     seed_scene,
+    wall_at_every_node,
 )
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "CONTACT_KINDS", "METHODS", "TOLERANCES", "Bar", "ContactqpError", "Load", "Model",
-    "OptionError", "QPProblem", "Result", "Scene", "SceneError", "SolverError", "SolverNotAvailable",
-    "Support", "Tolerances", "Wall", "__version__", "available_qp_solvers", "build_model",
-    "check", "load_scene", "minimal", "qp_problem", "scene_from_dict", "scene_to_toml", "seed_scene", "solve",
+    "CONTACT_KINDS", "METHODS", "TOLERANCES", "Bar", "BarContact", "ContactqpError",
+    "DistributedLoad", "Load", "LoadPath", "Model", "OptionError", "QPProblem", "Result", "Scene",
+    "SceneError", "SolverError", "SolverNotAvailable", "Support", "Tolerances", "Wall",
+    "__version__", "available_qp_solvers", "build_model", "check", "first_contact_factor",
+    "load_path", "load_scene", "minimal", "qp_problem", "scene_from_dict", "scene_to_toml",
+    "seed_scene", "solve", "wall_at_every_node",
 ]

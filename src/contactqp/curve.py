@@ -163,5 +163,12 @@ def _stepped(scene: Scene, factors: np.ndarray, method: str, contact: str,
     return results
 
 
-__all__ = ["CURVE_METHODS", "DEFAULT_STEPS", "curve_methods", "LoadPath", "MethodPath", "first_contact_factor",
-           "load_path"]
+__all__ = [
+    "CURVE_METHODS",
+    "DEFAULT_STEPS",
+    "LoadPath",
+    "MethodPath",
+    "curve_methods",
+    "first_contact_factor",
+    "load_path",
+]

@@ -13,6 +13,8 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
+import numpy as np
+
 from contactqp.errors import OptionError
 from contactqp.methods.augmented import solve_augmented
 from contactqp.methods.lagrange import solve_lagrange
@@ -109,7 +111,11 @@ def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "
     built = time.perf_counter()
     if formulation == "condensed":
         condensed = condense(model)
-        solution = function(condensed.model, contact, **options)
+        if condensed.model.n_free:
+            solution = function(condensed.model, contact, **options)
+        else:  # no contacts: nothing left to solve, u = K⁻¹P
+            solution = Solution(np.zeros(0), np.zeros(0), solver=method,
+                                status="solved (no contact unknowns)")
         solution = replace(solution, u_free=condensed.displacements(solution.contact_force))
     elif formulation == "strain":
         solution = function(model, contact, formulation="strain", **options)

@@ -42,6 +42,7 @@ claims nothing, which the Result's check flags.
 from __future__ import annotations
 
 import importlib
+import math
 import time
 from dataclasses import dataclass
 from functools import cached_property
@@ -155,7 +156,8 @@ def scales(model: Model) -> tuple[float, float]:
     the loads and walls see it, from the scene's structure alone. U = max(‖K⁻¹P‖∞, largest
     −gap): the free (wall-less) displacement, or how far a wall starts past its node; F = k·U.
     Contact forces are then O(F): a wall with an open gap can only take what the loads bring.
-    Both right-hand sides go through one banded Cholesky factorisation. Without loads or walls
+    U is rounded to a power of two. Both right-hand sides go through one banded Cholesky
+    factorisation. Without loads or walls
     k falls back to the largest diagonal of K; without loads or penetrations (u = 0 then) U is
     the largest gap, or 1 m.
     """
@@ -174,6 +176,10 @@ def scales(model: Model) -> tuple[float, float]:
     U = max(float(np.abs(solved[:, 1]).max(initial=0.0)), float(np.max(-model.g, initial=0.0)))
     if not U > 0.0:  # nothing loads the bar: u = 0, λ = 0; any U will do, the gaps if any
         U = float(np.abs(model.g).max(initial=0.0)) or 1.0
+    # U rounded to a power of two: then F / U is exactly k, so the scaled K does not change
+    # with the loads (a cvxpy re-solve along a load path finds its cached problem), and
+    # dividing by U rounds nothing
+    U = math.ldexp(1.0, round(math.log2(U))) if math.isfinite(U) else U
     return U, k * U
 
 
@@ -551,7 +557,19 @@ def solve_qp(model: Model, contact: str, *, backend: str = DEFAULT_BACKEND,
 
 
 __all__ = [
-    "ACCURACY", "BACKEND_ACCURACY", "BACKENDS", "DEFAULT_BACKEND", "DEFAULT_SCALE", "DUAL_SIGNS", "PRESCALED",
-    "QPOutcome", "QPProblem", "QPSolverInfo", "available_qp_solvers", "qp_from_model",
-    "qp_problem", "scales", "solve_qp",
+    "ACCURACY",
+    "BACKENDS",
+    "BACKEND_ACCURACY",
+    "DEFAULT_BACKEND",
+    "DEFAULT_SCALE",
+    "DUAL_SIGNS",
+    "PRESCALED",
+    "QPOutcome",
+    "QPProblem",
+    "QPSolverInfo",
+    "available_qp_solvers",
+    "qp_from_model",
+    "qp_problem",
+    "scales",
+    "solve_qp",
 ]
