@@ -67,7 +67,8 @@ TOLERANCES = Tolerances()
 
 @dataclass(frozen=True)
 class Solution:
-    """What a method returns: free-node displacements (m) and one contact force per wall (N)."""
+    """What a method returns: free-node displacements (m) and one contact force per contact
+    row (N)."""
 
     u_free: np.ndarray
     contact_force: np.ndarray
@@ -198,11 +199,13 @@ class Result:
 
     Attributes
     ----------
-    u : displacement of every node (m, +x), supports included.
-    contact_force : one per wall in scene order (N), positive when the wall pushes the bar.
+    u : displacement of every node (m, +x), supports included, bar after bar.
+    contact_force : one per contact row (N): the walls in scene order, then the bar contacts;
+        positive when the wall (the other bar) pushes.
     reactions : one per support in scene order (N), the force the support applies in +x.
-    penetration : one per wall (m), positive when the node is past the wall.
-    element_force, stress : axial force (N) and stress (Pa) of each element, tension positive.
+    penetration : one per contact row (m), positive when the contact is closed past its gap.
+    element_force, stress : axial force (N) and stress (Pa) of each element, bar after bar,
+        tension positive.
     stress_ratio : largest |stress| over the yield stress (None without a yield stress).
     residuals, verified, physical, message : the independent check (see :func:`check`).
     status, claimed_success : what the solver itself said, recorded and not trusted.
