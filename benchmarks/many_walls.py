@@ -17,6 +17,7 @@ import argparse
 import json
 import platform
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -70,8 +71,8 @@ def main() -> None:
             once = time.perf_counter() - start
             if method == "lagrange":
                 once = min(once, reference_time)
-            seconds = median_time(lambda: contactqp.solve(scene, method, **options),
-                                  3 if once < 1.0 else 1) if once < 10.0 else once
+            run = partial(contactqp.solve, scene, method, **options)
+            seconds = median_time(run, 3 if once < 1.0 else 1) if once < 10.0 else once
             error = float(np.abs(result.contact_force - reference.contact_force).max()) / lam_scale
             rows.append({"contacts": n, "run": label, "seconds": seconds, "ratio": seconds / base,
                          "iterations": result.iterations, "force_error": error,
