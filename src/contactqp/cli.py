@@ -146,12 +146,18 @@ def command_penalty_sweep(args: argparse.Namespace) -> int:
         print(f"{eps:9.0e}  {_values(r.contact_force, 10):>20}  {_values(r.penetration, 4):>16}  "
               f"{error:11.2e}  {'yes' if r.verified else 'NO'}")
     print(sweep.summary())
-    if not args.no_charts:
-        from contactqp import plot
-
-        Path(args.out).mkdir(parents=True, exist_ok=True)
-        print(f"chart: {plot.save(plot.plot_penalty_sweep(sweep), Path(args.out) / 'penalty_sweep.png')}")
+    _chart(args, "plot_penalty_sweep", "penalty_sweep.png", sweep)
     return 0
+
+
+def _chart(args: argparse.Namespace, function: str, name: str, *data: Any) -> None:
+    """Draw ``plot.<function>(*data)`` into ``args.out``/``name`` unless --no-charts."""
+    if args.no_charts:
+        return
+    from contactqp import plot  # matplotlib only when charts are asked for
+
+    Path(args.out).mkdir(parents=True, exist_ok=True)
+    print(f"chart: {plot.save(getattr(plot, function)(*data), Path(args.out) / name)}")
 
 
 def command_curve(args: argparse.Namespace) -> int:
@@ -177,11 +183,7 @@ def command_curve(args: argparse.Namespace) -> int:
     if any(not (m.verified.all() and m.physical.all()) for m in path.methods.values()):
         print("! the step's Result failed its check or a wall pulls (equality contact before the "
               "wall is reached; a soft penalty's penetration)")
-    if not args.no_charts:
-        from contactqp import plot
-
-        Path(args.out).mkdir(parents=True, exist_ok=True)
-        print(f"chart: {plot.save(plot.plot_load_path(path, kink), Path(args.out) / 'load_path.png')}")
+    _chart(args, "plot_load_path", "load_path.png", path, kink)
     return 0
 
 
