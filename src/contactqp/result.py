@@ -97,7 +97,7 @@ def external_forces(scene: Scene, contact_force: np.ndarray,
     rows, contact_nodes, values, _ = scene.contact_rows
     nodes, loads = scene.load_nodes, np.array([p.force for p in scene.loads], dtype=float)
     if scene.distributed:
-        spread = scene.with_loads(()).nodal_loads()
+        spread = scene.distributed_nodal_loads()
         at = np.flatnonzero(spread)
         nodes, loads = np.concatenate((nodes, at)), np.concatenate((loads, spread[at]))
     lam = np.asarray(contact_force, dtype=float).reshape(-1)

@@ -477,8 +477,14 @@ class Scene:
     def nodal_loads(self) -> np.ndarray:
         """The point loads and the distributed loads' consistent nodal forces summed per global
         node (N), length n_nodes."""
-        p = np.zeros(self.n_nodes)
+        p = self.distributed_nodal_loads()
         np.add.at(p, self.load_nodes, np.array([q.force for q in self.loads], dtype=float))
+        return p
+
+    def distributed_nodal_loads(self) -> np.ndarray:
+        """The distributed loads' consistent nodal forces per global node (N): each element
+        passes intensity × length / 2 to each of its two nodes."""
+        p = np.zeros(self.n_nodes)
         for q in self.distributed:
             bar = self.bars[q.bar]
             stop = bar.n_elements if q.stop is None else q.stop
