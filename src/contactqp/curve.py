@@ -26,7 +26,7 @@ import numpy as np
 
 from contactqp.errors import OptionError
 from contactqp.methods import METHODS, solve, validate
-from contactqp.model import CONDENSE_LIMIT, build_model, condense, wall_stiffness
+from contactqp.model import CONDENSE_LIMIT, Condensed, Model, build_model, condense, wall_stiffness
 from contactqp.result import Result, make_result
 from contactqp.scene import Scene, seed_scene
 
@@ -44,11 +44,11 @@ DEFAULT_STEPS = 21
 SOFT_PENALTY_PER_STIFFNESS = 1.0  # ε of the soft penalty, times the stiffness the walls see
 
 
-def curve_methods(scene: Scene) -> dict[str, tuple[str, str, dict[str, Any]]]:
+def curve_methods(scene: Scene | Model) -> dict[str, tuple[str, str, dict[str, Any]]]:
     """:data:`CURVE_METHODS` plus "soft penalty": ε = the stiffness the contacts see
     (:func:`contactqp.model.wall_stiffness`), so that its penetration, λ/ε, is as large as
     the displacement the contact prevents and the softer slope past the kink shows."""
-    seen = wall_stiffness(build_model(scene))
+    seen = wall_stiffness(scene if isinstance(scene, Model) else build_model(scene))
     methods = dict(CURVE_METHODS)
     if seen is not None:
         methods["soft penalty"] = ("penalty", "inequality",
@@ -118,13 +118,18 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
     :func:`curve_methods`)."""
     scene = seed_scene() if scene is None else scene
     factors = _factors(steps)
-    methods = curve_methods(scene) if methods is None else methods
+    model = build_model(scene)
+    methods = curve_methods(model) if methods is None else methods
     node = scene.load_point()
+    condensed = None  # factored on first use, then shared by every explicit method
     paths = {}
     for name, (method, contact, options) in methods.items():
         validate(method, contact, options)
         if method in ("lagrange", "penalty", "augmented"):
-            results = _stepped(scene, factors, method, contact, options)
+            if condensed is None and np.unique(model.C.indices).size <= CONDENSE_LIMIT:
+                start = time.perf_counter()
+                condensed = (condense(model), time.perf_counter() - start)
+            results = _stepped(model, condensed, factors, method, contact, options)
         else:
             results = [solve(scene.scaled_loads(t), method, contact, **options) for t in factors]
         paths[name] = MethodPath(
@@ -137,22 +142,23 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
     return LoadPath(scene, factors, node, paths)
 
 
-def _stepped(scene: Scene, factors: np.ndarray, method: str, contact: str,
-             options: dict[str, Any]) -> list[Result]:
-    """One explicit method along the load factors, K factored once (condensed)."""
-    model = build_model(scene)
-    if np.unique(model.C.indices).size > CONDENSE_LIMIT:
+def _stepped(model: Model, condensed: tuple[Condensed, float] | None, factors: np.ndarray,
+             method: str, contact: str, options: dict[str, Any]) -> list[Result]:
+    """One explicit method along the load factors on the model's factorisation ``condensed``
+    (the Condensed model and the time it took); None: a full solve per step."""
+    scene = model.scene
+    if condensed is None:
         return [solve(scene.scaled_loads(t), method, contact, **options) for t in factors]
-    start = time.perf_counter()
-    condensed = condense(model)
-    factor_time = time.perf_counter() - start
+    factored, factor_time = condensed
     function = METHODS[method]
     results = []
     for t in factors:
         start = time.perf_counter()
-        reduced = replace(condensed.model, P=t * condensed.model.P)
-        step = function(reduced, contact, **options)
-        u_free = t * condensed.u0 - condensed.X @ (condensed.model.C.T @ step.contact_force)
+        # the loads scale the free displacements t·K⁻¹P and the condensed load alike
+        scaled_condensed = replace(factored, u0=t * factored.u0,
+                                   model=replace(factored.model, P=t * factored.model.P))
+        step = function(scaled_condensed.model, contact, **options)
+        u_free = scaled_condensed.displacements(step.contact_force)
         solved = time.perf_counter()
         scaled = replace(model, scene=scene.scaled_loads(t), P=t * model.P)
         results.append(make_result(

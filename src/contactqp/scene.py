@@ -457,7 +457,7 @@ class Scene:
         n_walls = len(walls)
         offsets = self.node_offsets
         wall_nodes = np.array([offsets[w.bar] + w.node for w in walls], dtype=np.intp)
-        signs = np.array([1.0 if w.side == "+" else -1.0 for w in walls])
+        signs = np.array([w.sign for w in walls], dtype=float)
         a = np.array([offsets[c.bar_a] + c.node_a for c in contacts], dtype=np.intp)
         b = np.array([offsets[c.bar_b] + c.node_b for c in contacts], dtype=np.intp)
         rows = np.concatenate((np.arange(n_walls), n_walls + np.arange(a.size),
