@@ -129,7 +129,7 @@ BAD_SCENES = [  # (part replaced or added, its bad text, what the error line mus
     ("support", "[[support]]\nnode = 3\n", "support[0].node = 3"),
     ("load", "[[load]]\nnode = 7\nforce = 1.0\n", "load[0].node = 7"),
     ("wall", "[[wall]]\nnode = 5\ngap = 0.0\n", "wall[0].node = 5"),
-    ("wall", "[[wall]]\nnode = 1\ngap = -1e-3\n", "wall[0].gap"),
+    ("wall", "[[wall]]\nnode = 1\ngap = 'near'\n", "wall[0].gap"),
 ]
 
 

@@ -356,6 +356,34 @@ def test_cvxpy_resolves_a_new_load_without_recanonicalising():
                                    atol=1e-6 * np.abs(reference.contact_force).max())
 
 
+@pytest.mark.parametrize(("limit", "parameters"), [(10**9, "loads, gaps"), (40, "loads"),
+                                                   (1, "none")])
+def test_cvxpy_uses_constants_where_parameters_would_densify(monkeypatch, limit, parameters):
+    # cvxpy densifies (unknowns + 2) x (parameter entries + 1) coefficients; over the limit a
+    # vector is a constant and its values key the cache: a new value must not hit a stale one
+    if qpmod.BACKENDS["cvxpy"] is None:
+        pytest.skip("cvxpy is not installed")
+    backend = qpmod.BACKENDS["cvxpy"]
+    monkeypatch.setattr(backend, "DENSE_LIMIT", limit)
+    backend.clear_cache()
+    scene = several_walls()  # 6 unknowns, 3 loads, 4 walls: 8 x 4 = 32, 8 x 8 = 64 entries
+    heavier = scene.with_loads(tuple(Load(p.node, 1.001 * p.force) for p in scene.loads))
+    wider = heavier.with_walls(scene.walls[:-1] + (Wall(5, 6e-3, "+"),))  # the open wall
+    # the same displacement scale U throughout, so a new load or gap changes the scaled q or g
+    assert len({qpmod.scales(contactqp.build_model(s))[0] for s in (scene, heavier)}) == 1
+    caches = []
+    for changed in (scene, heavier, wider, wider):
+        again = qpmod.solve_qp(contactqp.build_model(changed), "inequality", backend="cvxpy")
+        assert again.info["parameters"] == parameters
+        caches.append(again.info["cache"])
+        reference = contactqp.solve(changed, method="lagrange")
+        np.testing.assert_allclose(again.contact_force, reference.contact_force, rtol=0,
+                                   atol=1e-6 * np.abs(reference.contact_force).max())
+    expected = {"loads, gaps": ["miss", "hit", "hit", "hit"], "loads": ["miss", "hit", "miss",
+                "hit"], "none": ["miss", "miss", "miss", "hit"]}[parameters]
+    assert caches == expected
+
+
 def test_dense_solvers_are_not_attempted_on_a_long_bar(monkeypatch):
     monkeypatch.setattr(qpmod, "DENSE_LIMIT", 3)
     row = next((r for r in SOLVERS if (r.backend, r.solver) == ("qpsolvers", "quadprog")), None)

@@ -332,7 +332,7 @@ BAD_DATA = [
     (valid_data, ("support", 0, "node"), 5, "support[0].node", "5"),
     (valid_data, ("wall", 0, "node"), 7, "wall[0].node", "7"),
     (valid_data, ("wall", 0, "node"), 0, "wall[0].node", "0"),  # on the support
-    (valid_data, ("wall", 0, "gap"), -1e-4, "wall[0].gap", "-0.0001"),
+    (valid_data, ("wall", 0, "gap"), "1e-4", "wall[0].gap", "'1e-4'"),
     (valid_data, ("wall", 0, "gap"), math.nan, "wall[0].gap", "nan"),
     (valid_data, ("wall", 0, "side"), "left", "wall[0].side", "'left'"),
     (valid_data, ("support",), [], "support", None),  # no support: no value to show
@@ -422,7 +422,7 @@ def test_lengths_with_a_section_is_a_scene_error():
 @pytest.mark.parametrize("replace, by, field, shown", [
     ("youngs_modulus = 210e9", "youngs_modulus = nan", "material.youngs_modulus", "nan"),
     ("youngs_modulus = 210e9", "youngs_modulus = -inf", "material.youngs_modulus", "-inf"),
-    ("gap = 1e-4 ", "gap = -1e-4 ", "wall[0].gap", "-0.0001"),
+    ("gap = 1e-4 ", "gap = inf ", "wall[0].gap", "inf"),
     ("node = 2\nforce", "node = 9\nforce", "load[0].node", "9"),
     ("node = 0", "node = 4", "wall[0].node", "4"),  # the support moved under the wall
     ("area_rule", "area_rul", "bar.section.area_rul", "unknown key"),

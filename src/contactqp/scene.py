@@ -242,7 +242,8 @@ class BarContact:
 
 @dataclass(frozen=True)
 class Wall:
-    """A rigid wall at a node, ``gap`` (m, >= 0) away from it on ``side``.
+    """A rigid wall at a node, ``gap`` (m) away from it on ``side``. A negative gap is an
+    interference: the node starts |gap| past the wall, which pushes it back (a press fit).
 
     ``side="+"``: the node may not move past u = +gap; the wall can only push in -x.
     ``side="-"``: the node may not move past u = -gap; the wall can only push in +x.
@@ -321,7 +322,7 @@ class Scene:
         seen: dict[tuple[int, str], int] = {}
         for i, wall in enumerate(walls):
             at = node(f"wall[{i}]", wall.bar, wall.node)
-            _number(f"wall[{i}].gap", wall.gap, minimum=0.0)
+            _number(f"wall[{i}].gap", wall.gap)
             if wall.side not in WALL_SIDES:
                 raise SceneError(f"wall[{i}].side must be '+' or '-', got {wall.side!r}")
             if at in held:
@@ -751,9 +752,9 @@ def scene_from_dict(data: dict, name: str = "scene") -> Scene:
     for i, o in enumerate(_array_of_tables(data, "obstacle", {"gap", "side", "bar"}, {"gap"})):
         gap = o["gap"]
         if isinstance(gap, list):
-            gap = [_number(f"obstacle[{i}].gap[{j}]", g, minimum=0.0) for j, g in enumerate(gap)]
+            gap = [_number(f"obstacle[{i}].gap[{j}]", g) for j, g in enumerate(gap)]
         else:
-            gap = _number(f"obstacle[{i}].gap", gap, minimum=0.0)
+            gap = _number(f"obstacle[{i}].gap", gap)
         scene = wall_at_every_node(scene, gap, o.get("side", "+"), o.get("bar", 0))
     return scene
 

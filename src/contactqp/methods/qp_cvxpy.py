@@ -9,7 +9,11 @@ Facts (cvxpy 1.9.3) that shape it:
 - K is wrapped in ``cp.psd_wrap``: without it the PSD check densifies K (1e5 elements exhaust
   memory).
 - The parameters are low-dimensional: p holds q at the loaded unknowns only, ``gaps`` one value
-  per wall. A length-n parameter densifies during canonicalisation (74 GiB at 1e5 elements).
+  per wall. cvxpy densifies the objective's coefficients as an (unknowns + 2) × (parameter
+  entries + 1) array (``coeff_extractor.extract_quadratic_coeffs``): 74.5 GiB with a wall at
+  every one of 1e5 nodes. So a vector is a parameter only while that array stays under
+  ``DENSE_LIMIT`` entries (loads first, then gaps); otherwise it is a constant, its values are
+  part of the cache key, and the Result's ``info["parameters"]`` says which are parameters.
 - Rows are written ``C @ x <= gaps`` / ``C @ x == gaps``, expression on the left: with the
   parameter on the left the equality's dual changes sign.
 - On a re-solve cvxpy turns OSQP's polishing off unless it is passed, so the accuracy table
@@ -47,6 +51,7 @@ MIXED_INTEGER_ONLY = {"ECOS_BB", "GLPK_MI"}
 # cvxpy runs ProxQP dense: its backend="sparse" path fails with the installed proxsuite
 # (TypeError in proxqp.sparse.QP), so ProxQP is limited to small bars (qp.DENSE_SOLVERS).
 CACHE_SIZE = 4  # scene structures kept (each holds its canonicalised problem)
+DENSE_LIMIT = 2**25  # entries (256 MiB) of cvxpy's dense objective coefficients
 
 
 def takes_qp(name: str) -> bool:
@@ -84,39 +89,61 @@ class Structure:
     rows: cp.Constraint | None
     tie_rows: cp.Constraint | None = None
 
+    @property
+    def parameters(self) -> str:
+        """Which vectors are cvxpy parameters (set on a re-solve) rather than constants."""
+        names = [name for name, value in (("loads", self.loads), ("gaps", self.gaps))
+                 if value is not None]
+        return ", ".join(names) or "none"
+
 
 _CACHE: OrderedDict[bytes, Structure] = OrderedDict()
+
+
+def parametrised(n: int, n_loaded: int, n_rows: int) -> tuple[bool, bool]:
+    """(loads, gaps): which vectors can be parameters with cvxpy's dense objective
+    coefficients, (n + 2) × (parameter entries + 1), under ``DENSE_LIMIT`` entries."""
+    loads = n_loaded > 0 and (n + 2) * (n_loaded + 1) <= DENSE_LIMIT
+    gaps = n_rows > 0 and (n + 2) * (n_loaded * loads + n_rows + 1) <= DENSE_LIMIT
+    return loads, gaps
 
 
 def _key(qp: QPProblem, loaded: np.ndarray) -> bytes:
     digest = hashlib.sha256(qp.contact.encode())
     ties = qp.ties if qp.ties is not None else sp.csc_array((0, qp.n))
-    for array in (np.array(qp.K.shape), qp.K.indptr, qp.K.indices, qp.K.data,
-                  qp.C.indptr, qp.C.indices, qp.C.data, ties.indptr, ties.indices, ties.data,
-                  loaded):
+    arrays = [np.array(qp.K.shape), qp.K.indptr, qp.K.indices, qp.K.data,
+              qp.C.indptr, qp.C.indices, qp.C.data, ties.indptr, ties.indices, ties.data, loaded]
+    loads, gaps = parametrised(qp.n, loaded.size, qp.g.size)
+    arrays += [qp.q[loaded]] * (not loads) + [qp.g] * (not gaps)  # constants: their values
+    for array in arrays:
         digest.update(np.ascontiguousarray(array).tobytes())
         digest.update(b"|")
     return digest.digest()
 
 
-def build_structure(K: sp.sparray, C: sp.sparray, loaded: np.ndarray, contact: str,
+def build_structure(K: sp.sparray, C: sp.sparray, q: np.ndarray, g: np.ndarray, contact: str,
                     ties: sp.sparray | None = None) -> Structure:
-    """The DPP problem of a structure: parameters for the loads at ``loaded`` and the gaps;
-    the strain formulation's ``ties`` are constant rows ``T @ x == 0``."""
-    x = cp.Variable(K.shape[0])
+    """The DPP problem of a structure: parameters for the loads at q's nonzeros and for the
+    gaps while they fit (``parametrised``), constants otherwise; the strain formulation's
+    ``ties`` are constant rows ``T @ x == 0``."""
+    n = K.shape[0]
+    loaded = np.flatnonzero(q)
+    x = cp.Variable(n)
     objective = 0.5 * cp.quad_form(x, cp.psd_wrap(sp.csc_matrix(K)))
     loads = gaps = rows = tie_rows = None
+    loads_parameter, gaps_parameter = parametrised(n, loaded.size, C.shape[0])
     if loaded.size:
-        loads = cp.Parameter(loaded.size)
-        objective = objective + loads @ x[loaded]
+        loads = cp.Parameter(loaded.size) if loads_parameter else None
+        objective = objective + (loads if loads_parameter else q[loaded]) @ x[loaded]
     constraints = []
     if ties is not None:
         tie_rows = sp.csr_matrix(ties) @ x == 0
         constraints.append(tie_rows)
     if C.shape[0]:
-        gaps = cp.Parameter(C.shape[0])
+        gaps = cp.Parameter(C.shape[0]) if gaps_parameter else None
         Cx = sp.csr_matrix(C) @ x
-        rows = Cx <= gaps if contact == "inequality" else Cx == gaps
+        right = gaps if gaps_parameter else g
+        rows = Cx <= right if contact == "inequality" else Cx == right
         constraints.append(rows)
     problem = cp.Problem(cp.Minimize(objective), constraints)
     return Structure(problem, x, loaded, loads, gaps, rows, tie_rows)
@@ -129,7 +156,7 @@ def structure(qp: QPProblem) -> tuple[Structure, bool]:
     if key in _CACHE:
         _CACHE.move_to_end(key)
         return _CACHE[key], True
-    built = build_structure(qp.K, qp.C, loaded, qp.contact, qp.ties)
+    built = build_structure(qp.K, qp.C, qp.q, qp.g, qp.contact, qp.ties)
     _CACHE[key] = built
     while len(_CACHE) > CACHE_SIZE:
         _CACHE.popitem(last=False)
@@ -164,5 +191,6 @@ def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
         claimed_success=status == cp.OPTIMAL, iterations=int(stats.num_iters or 0),
         info={"time_setup": (ready - start) + (cached.problem.compilation_time or 0.0),
               "time_solve": (solved - ready) - (cached.problem.compilation_time or 0.0),
-              "time_solver": stats.solve_time, "cache": "hit" if hit else "miss"},
+              "time_solver": stats.solve_time, "cache": "hit" if hit else "miss",
+              "parameters": cached.parameters},
     )
