@@ -22,8 +22,14 @@ DECISION_RTOL = 1e-12
 
 
 def saddle_point_system(K: sp.sparray, C: sp.sparray) -> sp.csr_array:
-    """The sparse saddle-point matrix [[K, Cᵀ], [C, 0]]."""
-    return sp.csr_array(sp.block_array([[K, C.T], [C, None]], format="csr"))
+    """The sparse saddle-point matrix [[K, Cᵀ], [C, 0]], assembled from the entries (scipy's
+    block_array took ~0.6 ms per active-set step on the 4-element default scene)."""
+    n, m = K.shape[0], C.shape[0]
+    Kc, Cc = sp.coo_array(K), sp.coo_array(C)
+    row = np.concatenate((Kc.row, Cc.col, n + Cc.row))
+    col = np.concatenate((Kc.col, n + Cc.row, Cc.col))
+    data = np.concatenate((Kc.data, Cc.data, Cc.data))
+    return sp.csr_array(sp.coo_array((data, (row, col)), shape=(n + m, n + m)))
 
 
 def banded_order(C: sp.csr_array, n: int) -> np.ndarray:

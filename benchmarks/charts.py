@@ -1,0 +1,165 @@
+"""The four charts of benchmarks/run.py, drawn from its rows (matplotlib, Agg)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+from matplotlib.colors import ListedColormap
+from matplotlib.lines import Line2D
+
+ERROR_FLOOR = 1e-17  # errors of exactly 0 are drawn here
+GROUPS = {  # colour per method or backend
+    "lagrange": "tab:blue", "penalty": "tab:orange", "augmented": "tab:green",
+    "qp clarabel": "tab:red", "qp osqp": "tab:purple", "qp cvxpy": "tab:brown",
+    "qp qpsolvers": "tab:gray",
+}
+MARKERS = {"full": "o", "strain": "s", "condensed": "^"}
+OUTCOME_COLOURS = {"verified": "#4daf4a", "flagged": "#ffb347",
+                   "claimed success, wrong": "#e41a1c", "verified, wrong": "#984ea3",
+                   "skipped": "#d9d9d9"}
+SEVERITY = ["skipped", "verified", "flagged", "claimed success, wrong", "verified, wrong"]
+
+
+def group(row: dict[str, Any]) -> str:
+    if row["method"] == "qp":
+        return f"qp {row['backend']}"
+    return row["method"]
+
+
+def _ran(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Rows that ran to a Result (not skipped, not raised)."""
+    return [r for r in rows if "seconds" in r]
+
+
+def speed_accuracy(rows, case_rows, out: Path, wrong: float) -> None:
+    sizes = [c for c in case_rows if c["case"] == "default" or c["case"].startswith("taper")]
+    fig, axes = plt.subplots(1, len(sizes), figsize=(4.2 * len(sizes), 4.2), squeeze=False)
+    for ax, case in zip(axes[0], sizes):
+        for r in _ran(rows):
+            if r["case"] != case["case"]:
+                continue
+            accepted = r["outcome"] == "verified"
+            colour = GROUPS[group(r)]
+            ax.scatter(r["seconds"], max(r["force_error"], ERROR_FLOOR),
+                       marker=MARKERS[r["formulation"]], s=22, alpha=0.8,
+                       facecolors=colour if accepted else "none", edgecolors=colour)
+        ax.axvline(case["floor_seconds"], color="k", ls=":", lw=1)
+        ax.axhline(wrong, color="k", ls="--", lw=0.7)
+        ax.set(xscale="log", yscale="log", title=f"{case['case']} ({case['elements']} elements)",
+               xlabel="time (s), end to end")
+    axes[0][0].set_ylabel("contact-force error (relative)")
+    handles = [Line2D([], [], color=c, marker="o", ls="", label=g) for g, c in GROUPS.items()]
+    handles += [Line2D([], [], color="k", marker=m, ls="", mfc="none", label=f)
+                for f, m in MARKERS.items()]
+    handles += [Line2D([], [], color="k", ls=":", label="floor: one factor-and-solve of K"),
+                Line2D([], [], color="k", ls="--", label=f"wrong above {wrong:.0e}")]
+    fig.legend(handles=handles, loc="lower center", ncol=6, fontsize=8)
+    fig.suptitle("Speed against accuracy (filled: verified and right; hollow: flagged or wrong; "
+                 f"error 0 drawn at {ERROR_FLOOR:.0e})", fontsize=10)
+    fig.tight_layout(rect=(0, 0.1, 1, 0.95))
+    fig.savefig(out / "speed_accuracy.png", dpi=110)
+    plt.close(fig)
+
+
+def time_vs_elements(rows, case_rows, out: Path) -> None:
+    sizes = sorted((c for c in case_rows if c["case"] == "default" or
+                    c["case"].startswith("taper")), key=lambda c: c["elements"])
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    for name, colour in GROUPS.items():
+        for formulation, marker in MARKERS.items():
+            points = []
+            for case in sizes:
+                ok = [r["seconds"] for r in rows if r["case"] == case["case"]
+                      and r["outcome"] == "verified" and group(r) == name
+                      and r["formulation"] == formulation]
+                if ok:
+                    points.append((case["elements"], min(ok)))
+            if points:
+                x, y = zip(*points)
+                ax.plot(x, y, color=colour, marker=marker, lw=1,
+                        ls="-" if formulation == "condensed" else "--")
+    ax.plot([c["elements"] for c in sizes], [c["floor_seconds"] for c in sizes], "k:", lw=2)
+    handles = [Line2D([], [], color=c, label=g) for g, c in GROUPS.items()]
+    handles += [Line2D([], [], color="k", marker=m, ls="", label=f) for f, m in MARKERS.items()]
+    handles.append(Line2D([], [], color="k", ls=":", lw=2, label="floor"))
+    ax.legend(handles=handles, fontsize=8)
+    ax.set(xscale="log", yscale="log", xlabel="elements", ylabel="fastest verified run (s)",
+           title="Time against size: the tapered bar, one wall")
+    fig.tight_layout()
+    fig.savefig(out / "time_vs_elements.png", dpi=110)
+    plt.close(fig)
+
+
+def penalty(rows, case_rows, out: Path) -> None:
+    fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))
+    cases = [c["case"] for c in case_rows if c["case"] in ("default", "taper 1e2", "taper 1e4",
+                                                           "taper 1e6")]
+    for i, case in enumerate(cases):
+        for formulation, ls in (("full", "-"), ("condensed", "--")):
+            runs = sorted((r for r in _ran(rows) if r["case"] == case and r["method"] == "penalty"
+                           and r["formulation"] == formulation), key=lambda r: r["epsilon"])
+            if not runs:
+                continue
+            eps = [r["epsilon"] for r in runs]
+            colour = f"C{i}"
+            left.plot(eps, [max(r["max_penetration"], ERROR_FLOOR) for r in runs], ls=ls,
+                      color=colour, marker="o", ms=3, label=f"{case}, {formulation}")
+            right.plot(eps, [max(r["force_error"], ERROR_FLOOR) for r in runs], ls=ls,
+                       color=colour, marker="o", ms=3, label=f"{case}, {formulation}")
+            for r in runs:
+                if r["outcome"] != "verified":
+                    right.plot(r["epsilon"], max(r["force_error"], ERROR_FLOOR), "x",
+                               color=colour, ms=8)
+    left.set(xscale="log", yscale="log", xlabel="penalty ε (N/m)",
+             ylabel="largest penetration (m)", title="Penetration λ/ε")
+    right.set(xscale="log", yscale="log", xlabel="penalty ε (N/m)",
+              ylabel="contact-force error (relative)",
+              title="Force error: s/ε, then round-off (x: not verified)")
+    right.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / "penalty.png", dpi=110)
+    plt.close(fig)
+
+
+def stability_map(rows, case_rows, out: Path) -> None:
+    cases = [c["case"] for c in case_rows]
+    labels = list(dict.fromkeys(r["row"] for r in rows))
+    grid = [[0] * len(cases) for _ in labels]
+    text = [[""] * len(cases) for _ in labels]
+    for i, label in enumerate(labels):
+        for j, case in enumerate(cases):
+            cell = [r for r in rows if r["row"] == label and r["case"] == case]
+            grid[i][j] = max(SEVERITY.index(r["outcome"]) for r in cell)
+            ran = [r for r in cell if r["outcome"] != "skipped"]  # raised ones count as run
+            good = sum(r["outcome"] == "verified" for r in ran)
+            text[i][j] = f"{good}/{len(ran)}" if ran else "–"
+    fig, ax = plt.subplots(figsize=(1.0 * len(cases) + 3.5, 0.32 * len(labels) + 2))
+    ax.imshow(grid, cmap=ListedColormap([OUTCOME_COLOURS[s] for s in SEVERITY]), vmin=-0.5,
+              vmax=len(SEVERITY) - 0.5, aspect="auto")
+    for i in range(len(labels)):
+        for j in range(len(cases)):
+            ax.text(j, i, text[i][j], ha="center", va="center", fontsize=6.5)
+    ax.set_xticks(range(len(cases)), cases, rotation=40, ha="right", fontsize=8)
+    ax.set_yticks(range(len(labels)), labels, fontsize=7.5)
+    handles = [Line2D([], [], marker="s", ls="", ms=9, color=OUTCOME_COLOURS[s], label=s)
+               for s in SEVERITY]
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1), fontsize=8)
+    ax.set_title("Stability map: the worst outcome over formulations, scaling, accuracy and ε\n"
+                 "(text: verified-and-right runs / runs)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "stability_map.png", dpi=110)
+    plt.close(fig)
+
+
+def draw_all(rows: list[dict[str, Any]], case_rows: list[dict[str, Any]], out: Path,
+             wrong: float) -> None:
+    speed_accuracy(rows, case_rows, out, wrong)
+    for draw in (time_vs_elements, penalty, stability_map):
+        draw(rows, case_rows, out)
+
+

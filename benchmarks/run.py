@@ -1,0 +1,385 @@
+"""Speed against accuracy for every method and solver, and a map of where each fails.
+
+Cases: the default scene; the tapered bar with 10², 10⁴ and 10⁶ elements and one wall; a wall
+at every node (10² … 10⁵ contacts); an open contact; a contact that just touches; a closed
+gap (gap 0); a press fit (the node starts 0.1 mm past the wall). Runs: every method (lagrange,
+lagrange with equality contact, penalty over ε = 1e8 … 1e22, augmented, qp) × every installed
+QP backend and solver × formulation (full, strain, condensed) × scaling (scaled, SI) ×
+accuracy (default, high). Combinations that cannot fit are skipped with the reason recorded.
+
+Per run: median wall time over repeats, end to end (model, method, Result and its check), and
+its build/solve split; the ratio to a floor measured in the same run (one banded Cholesky
+factor-and-solve of K); the contact-force error against ``contactqp.reference`` (statics in
+extended precision, independent of the methods), relative to the largest reference force (or
+the largest load when no wall pushes); the largest penetration; the check's residuals;
+``verified``, ``physical`` and whether the solver claimed success. Outcomes:
+
+    verified                 the check accepts it (verified and physical) and it is right
+    flagged                  the check rejects it (or the method raised a SolverError), and the
+                             solver did not claim success with a wrong answer
+    claimed success, wrong   the solver claimed success and the answer is wrong (the check
+                             caught it)
+    verified, wrong          the check accepted a wrong answer: a failure of the check itself
+
+"Right" means a force error <= WRONG = 1e-4: ten times the check's largest tolerance (1e-5).
+The check bounds residuals; a force error is a residual times a condition number of order
+1–10, so an error between 1e-5 and 1e-4 is what "verified" allows, not a miss.
+
+    python benchmarks/run.py [--quick] [--out DIR]
+
+writes runs.csv, runs.json, best.md and four charts (speed_accuracy.png, time_vs_elements.png,
+penalty.png, stability_map.png) to DIR (default benchmarks/out/run). ``--quick`` runs the small
+cases only (under 2 minutes on a 2-core machine); CI runs it and checks the outputs parse
+(benchmarks/check_outputs.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import csv
+import datetime
+import json
+import math
+import os
+import platform
+import sys
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import contactqp
+from contactqp import Load, Wall
+from contactqp.errors import OptionError, SceneError, SolverError
+from contactqp.methods import qp as qpmod
+from contactqp.reference import reference
+from many_walls import obstacle  # benchmarks/ is on sys.path when a script runs
+from scale import floor, tapered_scene
+from timing import median_time
+
+WRONG = 1e-4  # a force error above this is a wrong answer (module docstring)
+EPSILONS = [10.0**e for e in range(8, 23, 2)]  # penalty ε (N/m)
+FORMULATIONS = ("full", "strain", "condensed")
+BUDGET = 5.0  # s: a run whose time, extrapolated from the previous size, exceeds it is skipped
+OUTCOMES = ("verified", "flagged", "claimed success, wrong", "verified, wrong", "skipped")
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    family: str  # runs of one family at growing sizes share the budget extrapolation
+    build: Callable[[], contactqp.Scene]
+    quick: bool = False
+
+
+def _default_with(gap: float | None = None, load_factor: float = 1.0) -> contactqp.Scene:
+    scene = contactqp.seed_scene()
+    if gap is not None:
+        scene = scene.with_walls((Wall(4, gap),))
+    return scene.scaled_loads(load_factor) if load_factor != 1.0 else scene
+
+
+def touching() -> contactqp.Scene:
+    """The default scene with the load that brings node 4 exactly onto the wall: F·f₂ = g,
+    f₂ = Σ 1/k over the two elements before the load (the bar beyond it is unstressed)."""
+    scene = contactqp.seed_scene()
+    flexibility = math.fsum(1.0 / scene.stiffness[:2])
+    return scene.with_loads((Load(2, scene.walls[0].gap / flexibility),))
+
+
+CASES = [
+    Case("default", "taper", contactqp.seed_scene, quick=True),
+    Case("taper 1e2", "taper", lambda: tapered_scene(10**2), quick=True),
+    Case("taper 1e4", "taper", lambda: tapered_scene(10**4)),
+    Case("taper 1e6", "taper", lambda: tapered_scene(10**6)),
+    Case("walls 1e2", "walls", lambda: obstacle(10**2), quick=True),
+    Case("walls 1e3", "walls", lambda: obstacle(10**3)),
+    Case("walls 1e4", "walls", lambda: obstacle(10**4)),
+    Case("walls 1e5", "walls", lambda: obstacle(10**5)),
+    Case("open", "open", lambda: _default_with(gap=2e-3), quick=True),
+    Case("touching", "touching", touching, quick=True),
+    Case("gap 0", "gap 0", lambda: _default_with(gap=0.0), quick=True),
+    Case("press fit", "press fit", lambda: _default_with(gap=-1e-4), quick=True),
+]
+
+
+@dataclass(frozen=True)
+class Spec:
+    """One run configuration (the same across cases)."""
+
+    method: str
+    formulation: str = "full"
+    contact: str = "inequality"
+    backend: str = ""
+    solver: str = ""
+    scale: bool | None = None
+    accuracy: str = ""
+    epsilon: float | None = None
+    options: dict[str, Any] = field(default_factory=dict, hash=False, compare=False)
+
+    @property
+    def row(self) -> str:
+        """The stability map's row: method (and backend/solver)."""
+        if self.method == "qp":
+            return f"qp {self.backend}" + (f"/{self.solver}" if self.backend in
+                                          ("cvxpy", "qpsolvers") else "")
+        return self.method + (" (equality)" if self.contact == "equality" else "")
+
+    @property
+    def label(self) -> str:
+        parts = [self.row, self.formulation]
+        if self.epsilon is not None:
+            parts.append(f"ε={self.epsilon:.0e}")
+        if self.scale is not None:
+            parts += ["scaled" if self.scale else "SI", self.accuracy]
+        return " ".join(parts)
+
+
+def specs() -> list[Spec]:
+    runs = [Spec("lagrange", f) for f in FORMULATIONS]
+    runs.append(Spec("lagrange", "full", contact="equality"))
+    runs += [Spec("penalty", f, epsilon=e, options={"penalty": e})
+             for e in EPSILONS for f in ("full", "condensed")]
+    runs += [Spec("augmented", f) for f in ("full", "condensed")]
+    for info in qpmod.available_qp_solvers():
+        if not info.available:
+            print(f"skipped: qp {info.backend}/{info.solver} is not installed "
+                  f"({info.install})", file=sys.stderr)
+            continue
+        for formulation in FORMULATIONS:
+            for scale in (True, False):
+                for accuracy in ("default", "high"):
+                    runs.append(Spec("qp", formulation, backend=info.backend, solver=info.solver,
+                                     scale=scale, accuracy=accuracy,
+                                     options={"backend": info.backend, "solver": info.solver,
+                                              "scale": scale, "accuracy": accuracy}))
+    return runs
+
+
+def skip_reason(spec: Spec, scene: contactqp.Scene, n_free: int,
+                estimate: float | None) -> str | None:
+    """Why ``spec`` cannot fit ``scene``, or None."""
+    if (spec.method == "qp" and (spec.backend, spec.solver) in qpmod.DENSE_SOLVERS
+            and spec.formulation != "condensed" and n_free > qpmod.DENSE_LIMIT):
+        return f"dense solver, {n_free} unknowns > {qpmod.DENSE_LIMIT}"
+    if spec.formulation == "condensed" and scene.n_contacts > contactqp.model.CONDENSE_LIMIT:
+        return (f"condensed: {scene.n_contacts} contact nodes > "
+                f"{contactqp.model.CONDENSE_LIMIT} (a dense flexibility)")
+    if estimate is not None and estimate > BUDGET:
+        return f"over budget: about {estimate:.0f} s per solve, from the previous size"
+    return None
+
+
+def force_error(result: contactqp.Result, exact: np.ndarray, load_scale: float) -> float:
+    scale = float(np.abs(exact).max(initial=0.0)) or load_scale
+    error = float(np.abs(result.contact_force - exact).max(initial=0.0)) / scale
+    return error if math.isfinite(error) else math.inf
+
+
+def outcome(accepted: bool, claimed: bool, right: bool) -> str:
+    if accepted:
+        return "verified" if right else "verified, wrong"
+    return "claimed success, wrong" if claimed and not right else "flagged"
+
+
+def run_one(spec: Spec, scene: contactqp.Scene, exact: np.ndarray, load_scale: float,
+            floor_s: float, quick: bool) -> dict[str, Any]:
+    def call() -> contactqp.Result:
+        return contactqp.solve(scene, spec.method, contact=spec.contact,
+                               formulation=spec.formulation, **spec.options)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # solvers' own warnings; the check decides
+        start = time.perf_counter()
+        result = call()
+        first = time.perf_counter() - start
+        repeats = (3 if quick else 5) if first < 0.05 else (3 if first < 1.0 and not quick else 0)
+        seconds = median_time(call, repeats) if repeats else first
+    right = force_error(result, exact, load_scale) <= WRONG
+    accepted = bool(result.verified and result.physical)
+    info = result.info
+    build = info.get("time_setup", result.timings.get("build"))
+    solve = info.get("time_solve", result.timings.get("solve"))
+    return {
+        "seconds": seconds, "first_seconds": first, "ratio": seconds / floor_s,
+        "build_seconds": build, "solve_seconds": solve,
+        "force_error": force_error(result, exact, load_scale),
+        "max_penetration": float(np.max(result.penetration, initial=-math.inf)),
+        **{f"residual_{k}": v for k, v in result.residuals.items()},
+        "verified": bool(result.verified), "physical": bool(result.physical),
+        "claimed_success": bool(result.claimed_success), "status": str(result.status),
+        "iterations": int(result.iterations), "cache": info.get("cache", ""),
+        "outcome": outcome(accepted, bool(result.claimed_success), right),
+        "claimed_success_wrong": bool(result.claimed_success and not right),
+    }
+
+
+@contextlib.contextmanager
+def quiet_stdout():
+    """Silence what solvers print from C (OSQP: "Polishing not needed") during a run."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    with open(os.devnull, "w") as null:
+        os.dup2(null.fileno(), 1)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 1)
+            os.close(saved)
+
+
+class Progress:
+    """A progress bar on stderr (a line per tenth when stderr is not a terminal)."""
+
+    def __init__(self, total: int) -> None:
+        self.total, self.done, self.start = total, 0, time.perf_counter()
+        self.tty = sys.stderr.isatty()
+        self.last_tenth = -1
+
+    def step(self, text: str) -> None:
+        self.done += 1
+        fraction = self.done / self.total
+        elapsed = time.perf_counter() - self.start
+        bar = "#" * int(30 * fraction) + "-" * (30 - int(30 * fraction))
+        line = f"[{bar}] {self.done}/{self.total} {elapsed:5.0f} s  {text}"
+        if self.tty:
+            print(f"\r{line[:110]:110}", end="", file=sys.stderr, flush=True)
+        elif int(10 * fraction) > self.last_tenth:
+            self.last_tenth = int(10 * fraction)
+            print(line, file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self.tty:
+            print(file=sys.stderr)
+
+
+def machine() -> dict[str, Any]:
+    import scipy
+
+    return {"date": datetime.date.today().isoformat(), "python": platform.python_version(),
+            "platform": platform.platform(), "processor": platform.processor(),
+            "cpus": os.cpu_count(), "numpy": np.__version__, "scipy": scipy.__version__,
+            "contactqp": contactqp.__version__,
+            "longdouble_eps": float(np.finfo(np.longdouble).eps)}
+
+
+def run(quick: bool) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    cases = [c for c in CASES if c.quick or not quick]
+    all_specs = specs()
+    progress = Progress(len(cases) * len(all_specs))
+    rows, case_rows = [], []
+    previous: dict[tuple[str, Spec], tuple[int, float]] = {}  # (family, spec) -> (n, seconds)
+    for case in cases:
+        scene = case.build()
+        exact = reference(scene)
+        model = contactqp.build_model(scene)
+        load_scale = float(np.abs(scene.nodal_loads()).max(initial=0.0)) or 1.0
+        floor_s = floor(scene, 5 if scene.n_elements < 10**5 else 3)
+        case_rows.append({"case": case.name, "elements": scene.n_elements,
+                          "contacts": scene.n_contacts, "floor_seconds": floor_s,
+                          "reference_force_max": float(exact.contact_force.max(initial=0.0)),
+                          "reference_active": int(np.count_nonzero(exact.contact_force > 0)),
+                          "reference_steps": exact.steps})
+        for spec in all_specs:
+            row = {"case": case.name, "elements": scene.n_elements,
+                   "contacts": scene.n_contacts, "row": spec.row, "label": spec.label,
+                   "method": spec.method, "contact": spec.contact, "backend": spec.backend,
+                   "solver": spec.solver, "formulation": spec.formulation,
+                   "scaling": "" if spec.scale is None else ("scaled" if spec.scale else "SI"),
+                   "accuracy": spec.accuracy, "epsilon": spec.epsilon,
+                   "floor_seconds": floor_s}
+            before = previous.get((case.family, spec))
+            estimate = None if before is None else before[1] * scene.n_elements / before[0]
+            reason = skip_reason(spec, scene, model.n_free, estimate)
+            if reason is None:
+                try:
+                    with quiet_stdout():
+                        row.update(run_one(spec, scene, exact.contact_force, load_scale,
+                                           floor_s, quick))
+                    previous[case.family, spec] = (scene.n_elements, row["seconds"])
+                except (OptionError, SceneError) as error:  # refused up front: cannot fit
+                    reason = f"{type(error).__name__}: {error}"
+                except SolverError as error:  # the method failed, and said so: flagged
+                    row.update({"outcome": "flagged", "status": f"raised: {error}",
+                                "verified": False, "claimed_success": False,
+                                "claimed_success_wrong": False})
+            if reason is not None:
+                row.update({"outcome": "skipped", "skip_reason": reason})
+            rows.append(row)
+            progress.step(f"{case.name}: {spec.label}")
+    progress.close()
+    return rows, case_rows
+
+
+def best_table(rows: list[dict[str, Any]], case_rows: list[dict[str, Any]]) -> str:
+    lines = [("| case | elements | contacts | floor | fastest verified (time, / floor, error) "
+             "| most accurate verified (error, time) |"), "|---|---|---|---|---|---|"]
+    for case in case_rows:
+        ran = [r for r in rows if r["case"] == case["case"] and r["outcome"] == "verified"]
+        if not ran:
+            lines.append(f"| {case['case']} | {case['elements']} | {case['contacts']} | "
+                         f"{_time(case['floor_seconds'])} | none | none |")
+            continue
+        fastest = min(ran, key=lambda r: r["seconds"])
+        exact = min(ran, key=lambda r: (r["force_error"], r["seconds"]))
+        lines.append(
+            f"| {case['case']} | {case['elements']} | {case['contacts']} | "
+            f"{_time(case['floor_seconds'])} | {fastest['label']}: {_time(fastest['seconds'])}, "
+            f"{fastest['ratio']:.1f}×, {fastest['force_error']:.1e} | {exact['label']}: "
+            f"{exact['force_error']:.1e}, {_time(exact['seconds'])} |")
+    return "\n".join(lines) + "\n"
+
+
+def _time(seconds: float) -> str:
+    if seconds < 1e-3:
+        return f"{seconds * 1e6:.0f} µs"
+    return f"{seconds * 1e3:.1f} ms" if seconds < 1.0 else f"{seconds:.2f} s"
+
+
+def write(rows: list[dict[str, Any]], case_rows: list[dict[str, Any]], out: Path,
+          quick: bool) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    columns = list(dict.fromkeys(k for r in rows for k in r))
+    with open(out / "runs.csv", "w", newline="") as handle:
+        writer = csv.DictWriter(handle, columns)
+        writer.writeheader()
+        writer.writerows(rows)
+    document = {"machine": machine(), "quick": quick, "wrong_above": WRONG,
+                "cases": case_rows, "runs": rows}
+    (out / "runs.json").write_text(json.dumps(document, indent=1, default=_plain))
+    (out / "best.md").write_text(best_table(rows, case_rows))
+    import charts  # matplotlib only when writing
+
+    charts.draw_all(rows, case_rows, out, WRONG)
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    raise TypeError(f"not JSON: {value!r}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="the small cases only (under 2 minutes)")
+    parser.add_argument("--out", default="benchmarks/out/run", help="output folder")
+    args = parser.parse_args()
+    start = time.perf_counter()
+    rows, case_rows = run(args.quick)
+    write(rows, case_rows, Path(args.out), args.quick)
+    counts = {name: sum(r["outcome"] == name for r in rows) for name in OUTCOMES}
+    print(best_table(rows, case_rows))
+    print(f"{len(rows)} runs in {time.perf_counter() - start:.0f} s: " +
+          ", ".join(f"{n} {name}" for name, n in counts.items()))
+    print(f"written: {args.out}/runs.csv, runs.json, best.md, speed_accuracy.png, "
+          f"time_vs_elements.png, penalty.png, stability_map.png")
+
+
+if __name__ == "__main__":
+    main()
