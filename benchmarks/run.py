@@ -1,13 +1,13 @@
 """Speed against accuracy for every method and solver, and a map of where each fails.
 
-Cases: the default scene; the tapered bar with 10², 10⁴ and 10⁶ elements and one wall; a wall
+Cases: the default scene; the tapered bar with 10² … 10⁶ elements and one wall; a wall
 at every node (10² … 10⁵ contacts); an open contact; a contact that just touches; a closed
 gap (gap 0); a press fit (the node starts 0.1 mm past the wall). Runs: every method (lagrange,
 lagrange with equality contact, penalty over ε = 1e8 … 1e22, augmented, qp) × every installed
 QP backend and solver × formulation (full, strain, condensed) × scaling (scaled, SI) ×
 accuracy (default, high). Combinations that cannot fit are skipped with the reason recorded.
 
-Per run: median wall time over repeats, end to end (model, method, Result and its check), and
+Per run: median wall time over repeats after a first (warming) call, end to end (model, method, Result and its check), and
 its build/solve split; the ratio to a floor measured in the same run (one banded Cholesky
 factor-and-solve of K); the contact-force error against ``contactqp.reference`` (statics in
 extended precision, independent of the methods), relative to the largest reference force (or
@@ -41,8 +41,10 @@ import csv
 import datetime
 import json
 import math
+import multiprocessing
 import os
 import platform
+import statistics
 import sys
 import time
 import warnings
@@ -60,12 +62,19 @@ from contactqp.methods import qp as qpmod
 from contactqp.reference import reference
 from many_walls import obstacle  # benchmarks/ is on sys.path when a script runs
 from scale import floor, tapered_scene
-from timing import median_time
 
 WRONG = 1e-4  # a force error above this is a wrong answer (module docstring)
 EPSILONS = [10.0**e for e in range(8, 23, 2)]  # penalty ε (N/m)
 FORMULATIONS = ("full", "strain", "condensed")
+# timed calls after the first, from the first call's time (the first is the time when none)
+REPEATS = {False: lambda first: 5 if first < 0.05 else 3 if first < 0.3 else 1 if first < 1.0
+           else 0,
+           True: lambda first: 3 if first < 0.05 else 1}
+ISOLATE_FROM = 10**4  # elements: from this size every run goes to a forked child ...
+TIMEOUT = 20.0  # s: ... that is stopped after this long (the run is then skipped, with why)
 BUDGET = 5.0  # s: a run whose time, extrapolated from the previous size, exceeds it is skipped
+GROWTH = 1.5  # the extrapolation: time ~ n^GROWTH (CVXOPT through cvxpy took 30 ms on 1e2
+              # elements and 290 s on 1e4: linear extrapolation let it run)
 OUTCOMES = ("verified", "flagged", "claimed success, wrong", "verified, wrong", "skipped")
 
 
@@ -95,7 +104,9 @@ def touching() -> contactqp.Scene:
 CASES = [
     Case("default", "taper", contactqp.seed_scene, quick=True),
     Case("taper 1e2", "taper", lambda: tapered_scene(10**2), quick=True),
+    Case("taper 1e3", "taper", lambda: tapered_scene(10**3)),
     Case("taper 1e4", "taper", lambda: tapered_scene(10**4)),
+    Case("taper 1e5", "taper", lambda: tapered_scene(10**5)),
     Case("taper 1e6", "taper", lambda: tapered_scene(10**6)),
     Case("walls 1e2", "walls", lambda: obstacle(10**2), quick=True),
     Case("walls 1e3", "walls", lambda: obstacle(10**3)),
@@ -196,10 +207,15 @@ def run_one(spec: Spec, scene: contactqp.Scene, exact: np.ndarray, load_scale: f
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # solvers' own warnings; the check decides
         start = time.perf_counter()
-        result = call()
+        result = call()  # the first call also warms caches (cvxpy: canonicalisation)
         first = time.perf_counter() - start
-        repeats = (3 if quick else 5) if first < 0.05 else (3 if first < 1.0 and not quick else 0)
-        seconds = median_time(call, repeats) if repeats else first
+        repeats = REPEATS[quick](first)
+        times = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            result = call()
+            times.append(time.perf_counter() - start)
+        seconds = statistics.median(times) if times else first
     right = force_error(result, exact, load_scale) <= WRONG
     accepted = bool(result.verified and result.physical)
     info = result.info
@@ -217,6 +233,35 @@ def run_one(spec: Spec, scene: contactqp.Scene, exact: np.ndarray, load_scale: f
         "outcome": outcome(accepted, bool(result.claimed_success), right),
         "claimed_success_wrong": bool(result.claimed_success and not right),
     }
+
+
+def run_caught(*args: Any) -> dict[str, Any]:
+    """run_one, with contactqp's refusals as a skip and a SolverError as flagged."""
+    try:
+        with quiet_stdout():
+            return run_one(*args)
+    except (OptionError, SceneError) as error:  # refused up front: cannot fit
+        return {"skip_reason": f"{type(error).__name__}: {error}"}
+    except SolverError as error:  # the method failed, and said so: flagged
+        return {"outcome": "flagged", "status": f"raised: {error}", "verified": False,
+                "claimed_success": False, "claimed_success_wrong": False}
+
+
+def run_isolated(*args: Any) -> dict[str, Any]:
+    """run_caught in a forked child, stopped after TIMEOUT s: a solver stuck in its C code
+    (SCS at accuracy "high" on 1e5 elements: 230 s) cannot be interrupted from Python."""
+    context = multiprocessing.get_context("fork")
+    receive, send = context.Pipe(duplex=False)
+    child = context.Process(target=lambda: send.send(run_caught(*args)), daemon=True)
+    child.start()
+    send.close()
+    found = receive.recv() if receive.poll(TIMEOUT) else None
+    child.join(1.0)
+    if child.is_alive():
+        child.kill()
+        child.join()
+    receive.close()
+    return found if found is not None else {"skip_reason": f"timed out after {TIMEOUT:.0f} s"}
 
 
 @contextlib.contextmanager
@@ -294,24 +339,28 @@ def run(quick: bool) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
                    "accuracy": spec.accuracy, "epsilon": spec.epsilon,
                    "floor_seconds": floor_s}
             before = previous.get((case.family, spec))
-            estimate = None if before is None else before[1] * scene.n_elements / before[0]
+            estimate = (None if before is None
+                        else before[1] * (scene.n_elements / before[0]) ** GROWTH)
             reason = skip_reason(spec, scene, model.n_free, estimate)
             if reason is None:
-                try:
-                    with quiet_stdout():
-                        row.update(run_one(spec, scene, exact.contact_force, load_scale,
-                                           floor_s, quick))
-                    previous[case.family, spec] = (scene.n_elements, row["seconds"])
-                except (OptionError, SceneError) as error:  # refused up front: cannot fit
-                    reason = f"{type(error).__name__}: {error}"
-                except SolverError as error:  # the method failed, and said so: flagged
-                    row.update({"outcome": "flagged", "status": f"raised: {error}",
-                                "verified": False, "claimed_success": False,
-                                "claimed_success_wrong": False})
+                isolate = scene.n_elements >= ISOLATE_FROM
+                found = (run_isolated if isolate else run_caught)(
+                    spec, scene, exact.contact_force, load_scale, floor_s, quick)
+                if "skip_reason" in found:
+                    reason = found["skip_reason"]
+                    if reason.startswith("timed out"):  # the next size would take longer
+                        previous[case.family, spec] = (scene.n_elements, TIMEOUT)
+                else:
+                    row.update(found)
+                    if "seconds" in found:
+                        previous[case.family, spec] = (scene.n_elements, found["seconds"])
             if reason is not None:
                 row.update({"outcome": "skipped", "skip_reason": reason})
             rows.append(row)
             progress.step(f"{case.name}: {spec.label}")
+            if row.get("first_seconds", 0.0) > 3.0:
+                print(f"slow: {case.name}: {spec.label}: {row['first_seconds']:.1f} s",
+                      file=sys.stderr, flush=True)
     progress.close()
     return rows, case_rows
 

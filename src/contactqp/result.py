@@ -24,11 +24,13 @@ Residuals (all dimensionless, ∞-norms):
                      because a second wall 0.19 mm away set U). Only in a scene with no
                      loads and no wall past its node (u = 0, λ = 0 exactly) do the gaps set
                      U, and k_min × largest gap F
-    complementarity  max min(λᵢ⁺ / F, gapᵢ⁺ · k_max / F), gap = −penetration, x⁺ = max(x, 0),
-                     k_max the stiffest element (inequality contact): a wall may push or
-                     stand off, not both. The gap counts as the force it would put through
-                     the stiffest element: gap / U let a wall's force move to its neighbour on
-                     a fine mesh (Clarabel, 10⁵ walls: 3e-3 of the largest force, verified). The product λᵢ·penetrationᵢ / (F·U)
+    complementarity  max min(λᵢ⁺, gapᵢ⁺ · sᵢ) / F, gap = −penetration, x⁺ = max(x, 0)
+                     (inequality contact): a wall may push or stand off, not both. A wall's
+                     gap counts as the force it takes to close it, sᵢ the stiffness its node
+                     sees with the supports and the pushing walls held (seen_stiffness; a bar
+                     contact keeps sᵢ = F / U). With gap / U a wall's force could move to its
+                     neighbour on a fine mesh unseen (Clarabel, 10⁵ walls: 3e-3 of the largest
+                     force, verified). The product λᵢ·penetrationᵢ / (F·U)
                      is weaker: on a weakly active wall (zero gap, zero force) it passed a
                      QP answer 1.4e-4 F off (each factor ~1e-4, the product 1e-8)
     sign             max(0, −min λ) / F: how hard a wall pulls   (inequality contact)
@@ -145,12 +147,20 @@ def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.
         # the natural residual min(λ/F, gap/U) per wall, not the product λ·gap/(F·U): on a
         # weakly active wall (gap 0, λ 0) the product accepts λ and gap each ~√tol
         # (pulling and penetrating are the sign and feasibility residuals, not counted here)
-        # The gap is measured as the force it would put through the stiffest element,
-        # gap·k_max / F, not gap / U: on a fine mesh a wall's force moves to its neighbour
-        # when the gap between them changes by λ/k_e, far below U (Clarabel on 10⁵ walls at
-        # default tolerances: 3e-3 of the largest force on one wall, gap/U ~ 1e-7, verified)
-        complementarity = _norm(np.minimum(np.maximum(lam, 0.0) / force_scale,
-                                           np.maximum(-pen, 0.0) * k_max / force_scale))
+        # A wall's gap counts as the force it takes to close it: gap·s / F, s the stiffness
+        # the wall's node sees with the supports and the pushing walls held. With gap / U, a
+        # wall's force could move to a neighbouring wall unseen on a fine mesh, where s is
+        # an element's EA/L, far above F / U (Clarabel on 10⁵ walls at default tolerances:
+        # 3e-3 of the largest force on one wall, gap/U ~ 1e-7, verified). Bar contacts keep
+        # gap / U.
+        gap_force = np.maximum(-pen, 0.0) * force_scale / disp_scale
+        n_walls = len(scene.walls)
+        if n_walls:
+            wall_nodes = scene.contact_rows[1][:n_walls]
+            pushing = wall_nodes[lam[:n_walls] > tolerances.complementarity * force_scale]
+            gap_force[:n_walls] = (np.maximum(-pen[:n_walls], 0.0)
+                                   * seen_stiffness(scene, pushing, wall_nodes))
+        complementarity = _norm(np.minimum(np.maximum(lam, 0.0), gap_force)) / force_scale
         residuals = {"equilibrium": equilibrium, "feasibility": feasibility,
                      "complementarity": complementarity, "sign": pulling}
     if not (math.isfinite(force_scale) and math.isfinite(disp_scale)):
@@ -164,10 +174,32 @@ def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.
     ]
     physical = pulling <= tolerances.sign
     notes = list(failures)
-    if not physical:
+    if not physical and not np.isfinite(lam).all():
+        notes.append("non-physical: contact forces are not finite (the solver returned no "
+                     "answer)")
+    elif not physical:
         which = ", ".join(f"wall[{i}] {lam[i]:.6g} N" for i in np.flatnonzero(lam < 0))
         notes.append(f"non-physical: a wall pulls the bar ({which}); a rigid wall can only push")
     return Check(residuals, not failures, physical, "; ".join(notes))
+
+
+def seen_stiffness(scene: Scene, held: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """The stiffness (N/m) each of ``nodes`` (global) sees with the supports and the nodes
+    ``held`` fixed: 1/c_left + 1/c_right, c the compliance Σ L/(EA) to the nearest fixed node
+    on that side in the same bar (no term when there is none)."""
+    offsets = scene.node_offsets
+    phi = np.concatenate([bar.compliance_from_node_0 for bar in scene.bars])
+    fixed = np.unique(np.concatenate((scene.support_nodes, held)))
+    fixed_bar = np.searchsorted(offsets, fixed, side="right") - 1
+    node_bar = np.searchsorted(offsets, nodes, side="right") - 1
+    stiffness = np.zeros(nodes.size)
+    for neighbour, sign in ((np.searchsorted(fixed, nodes, side="left") - 1, 1.0),
+                            (np.searchsorted(fixed, nodes, side="right"), -1.0)):
+        near = (neighbour >= 0) & (neighbour < fixed.size)
+        near[near] &= fixed_bar[neighbour[near]] == node_bar[near]
+        compliance = sign * (phi[nodes[near]] - phi[fixed[neighbour[near]]])
+        stiffness[near] += 1.0 / compliance
+    return stiffness
 
 
 def section_residual(forces: np.ndarray, nodes: np.ndarray, external: np.ndarray) -> float:
