@@ -136,6 +136,21 @@ def test_force_across_an_open_gap_fails_complementarity():
     assert found.residuals["complementarity"] == pytest.approx(1.0 / 9.0, rel=1e-12)  # ulps
 
 
+def test_seen_stiffness_holds_the_supports_and_the_pushing_walls():
+    from contactqp.result import seen_stiffness
+
+    k = 2e11 * 1e-3 / 0.25  # four equal elements of EA/L = 8e8 N/m
+    one = Scene(Bar.from_areas([1e-3] * 4, 2e11, length=1.0), (Support(0),))
+    # node 2 held: node 2 itself sees the two elements to the support in series (k/2), node 3
+    # one element back to node 2 and a free end (k), node 1 one element each way (2k)
+    assert seen_stiffness(one, np.array([2]), np.array([1, 2, 3, 4])) == pytest.approx(
+        [2 * k, k / 2, k, k / 2], rel=1e-12)
+    # a second bar is not a neighbour: its support holds only its own nodes
+    two = Scene((one.bar, one.bar), (Support(0), Support(0, bar=1)))
+    assert seen_stiffness(two, np.array([], dtype=int), np.array([4, 6])) == pytest.approx(
+        [k / 4, k], rel=1e-12)  # bar 1 node 1: one element from its support
+
+
 def test_open_gap_fails_equality_feasibility():
     found = run_check(hand_scene(force=5e3), [0.0, 2.5e-5, 7.5e-5], [0.0], [-5e3], "equality")
     assert not found.verified

@@ -144,15 +144,8 @@ def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.
                      "complementarity": None, "sign": None}
     else:
         feasibility = max(0.0, float(pen.max(initial=0.0))) / disp_scale
-        # the natural residual min(λ/F, gap/U) per wall, not the product λ·gap/(F·U): on a
-        # weakly active wall (gap 0, λ 0) the product accepts λ and gap each ~√tol
-        # (pulling and penetrating are the sign and feasibility residuals, not counted here)
-        # A wall's gap counts as the force it takes to close it: gap·s / F, s the stiffness
-        # the wall's node sees with the supports and the pushing walls held. With gap / U, a
-        # wall's force could move to a neighbouring wall unseen on a fine mesh, where s is
-        # an element's EA/L, far above F / U (Clarabel on 10⁵ walls at default tolerances:
-        # 3e-3 of the largest force on one wall, gap/U ~ 1e-7, verified). Bar contacts keep
-        # gap / U.
+        # the natural residual min(λ, gap·s)/F per wall, not a product λ·gap (module
+        # docstring); pulling and penetrating are the sign and feasibility residuals
         gap_force = np.maximum(-pen, 0.0) * force_scale / disp_scale
         n_walls = len(scene.walls)
         if n_walls:
