@@ -12,6 +12,18 @@ Step = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 Update = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
+# An active-set decision ignores penetrations and pulls below this fraction of the
+# displacement and force scales: round-off, not contact.
+DECISION_RTOL = 1e-12
+
+
+def displacement_tolerance(u: np.ndarray, g: np.ndarray, P: np.ndarray, K) -> float:
+    """DECISION_RTOL of the displacement scale max(‖u‖, ‖g‖, ‖P‖ / max diag K): the last term
+    keeps it physical when the exact u is 0 (closed zero gaps)."""
+    return DECISION_RTOL * max(np.abs(u).max(initial=0.0), np.abs(g).max(initial=0.0),
+                               np.abs(P).max(initial=0.0) / K.diagonal().max())
+
+
 def default_max_iterations(n_rows: int) -> int:
     return 50 + 2 * n_rows
 

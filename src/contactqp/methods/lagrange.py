@@ -12,13 +12,9 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from contactqp import linalg
 from contactqp.errors import OptionError
-from contactqp.methods._active_set import active_set_loop
+from contactqp.methods._active_set import DECISION_RTOL, active_set_loop, displacement_tolerance
 from contactqp.model import Model, elongation_rows
 from contactqp.result import Solution
-
-# An active-set decision ignores penetrations and pulls below this fraction of the
-# displacement and force scales: round-off, not contact.
-DECISION_RTOL = 1e-12
 
 
 def saddle_point_system(K: sp.sparray, C: sp.sparray) -> sp.csr_array:
@@ -96,9 +92,7 @@ def solve_lagrange(model: Model, contact: str, *, max_iterations: int | None = N
 
     def update(active: np.ndarray, u: np.ndarray, lam: np.ndarray) -> np.ndarray:
         pen = C @ u - g
-        # |P| / max diag K keeps the scale physical when the exact u is 0 (closed zero gaps)
-        disp_tol = DECISION_RTOL * max(np.abs(u).max(initial=0.0), np.abs(g).max(initial=0.0),
-                                       np.abs(P).max(initial=0.0) / K.diagonal().max())
+        disp_tol = displacement_tolerance(u, g, P, K)
         force_tol = DECISION_RTOL * max(np.abs(P).max(initial=0.0), np.abs(lam).max(initial=0.0))
         return np.where(active, lam > -force_tol, pen > disp_tol)
 

@@ -12,8 +12,7 @@ import numpy as np
 
 from contactqp import linalg
 from contactqp.errors import OptionError
-from contactqp.methods._active_set import active_set_loop
-from contactqp.methods.lagrange import DECISION_RTOL
+from contactqp.methods._active_set import active_set_loop, displacement_tolerance
 from contactqp.model import Model
 from contactqp.result import Solution
 
@@ -52,8 +51,7 @@ def solve_penalty(model: Model, contact: str, *, penalty: float = DEFAULT_PENALT
         # just brings the node to the wall cycled (penetrated by round-off when open, pulled
         # by round-off when closed; found by benchmarks/run.py, case "touching")
         pen = C @ u - g
-        tol = DECISION_RTOL * max(np.abs(u).max(initial=0.0), np.abs(g).max(initial=0.0),
-                                  np.abs(P).max(initial=0.0) / K.diagonal().max())
+        tol = displacement_tolerance(u, g, P, K)
         return np.where(active, pen > -tol, pen > tol)
 
     u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="penalty",
