@@ -81,7 +81,12 @@ def test_perturbed_displacement_fails_equilibrium():
 def test_perturbation_within_a_loose_tolerance_is_accepted():
     u = list(U_CONTACT)
     u[1] *= 1.001  # about 10 N out of balance against a force scale of 30 kN: ~3e-4
-    loose = Tolerances(equilibrium=1e-2)  # 30 times the imbalance
+    strict = run_check(hand_scene(), u, [2e4], [-1e4])
+    # the imbalance moves node 1 by the 0.05 µm it was moved, 1.1e-4 of U = 0.45 mm (the
+    # free tip displacement 30 kN · f_2), and the forces by tens of newtons
+    assert strict.residuals["displacement"] == pytest.approx(5e-8 / 4.5e-4, rel=1e-6)
+    assert not strict.verified and "displacement" in strict.message
+    loose = Tolerances(equilibrium=1e-2, force=1e-2, displacement=1e-2)  # 30 times the above
     assert run_check(hand_scene(), u, [2e4], [-1e4], tolerances=loose).verified
 
 
@@ -103,9 +108,9 @@ def test_pulling_wall_in_equilibrium_fails_only_sign():
     assert not found.physical
     assert found.message.startswith("sign residual")
     assert "equilibrium" not in found.message
-    # sign residual = 5 kN pulled / force scale: 10 kN, the internal forces and the reaction
-    # (larger than the 5 kN load; an open gap is no force scale)
-    assert found.residuals["sign"] == pytest.approx(5e3 / 1e4, rel=1e-12)  # a few ulp
+    # sign residual = 5 kN pulled / force scale: the 5 kN load (from the scene alone, never
+    # from the answer; an open gap is no force scale)
+    assert found.residuals["sign"] == pytest.approx(5e3 / 5e3, rel=1e-12)  # a few ulp
     # equality contact allows the pull: verified, but not physical
     equality = run_check(scene, U_CONTACT, [-5e3], [-1e4], "equality")
     assert equality.verified
@@ -120,7 +125,8 @@ def test_penetrating_displacement_fails_feasibility():
     assert not found.verified
     assert "feasibility" in found.message
     assert "equilibrium" not in found.message  # it is in equilibrium, just past the wall
-    # 0.3 mm past the wall over the displacement scale max |u| = 0.45 mm
+    # 0.3 mm past the wall, as the force it takes to push the tip back: 0.3 mm · s, s the
+    # stiffness the tip sees with the support held, 1 / f_2 = 2e8/3 N/m: 20 kN of F = 30 kN
     assert found.residuals["feasibility"] == pytest.approx(2.0 / 3.0, rel=1e-12)  # a few ulp
 
 
@@ -195,7 +201,9 @@ def test_result_to_json(method, contact):
     assert data["reactions"] == result.reactions.tolist()
     assert data["penetration"] == result.penetration.tolist()
     assert data["verified"] is result.verified is True
-    assert set(data["residuals"]) == {"equilibrium", "feasibility", "complementarity", "sign"}
+    assert set(data["residuals"]) == {"equilibrium", "feasibility", "complementarity", "sign",
+                                      "force", "displacement"}
+    assert data["force_error_bound"] == result.force_error_bound
     if contact == "equality":
         assert data["residuals"]["complementarity"] is None
     assert isinstance(data["time"], float) and data["time"] >= 0.0

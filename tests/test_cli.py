@@ -87,13 +87,15 @@ def test_solve_equality_on_an_open_gap_reports_a_pulling_wall(capsys, tmp_path):
         "[[support]]\nnode = 0\n[[load]]\nnode = 2\nforce = 1000.0\n"
         "[[wall]]\nnode = 2\ngap = 1e-3\n"
     )
-    code, out, _ = run(capsys, "solve", str(scene), "--contact", "equality", "--json")
-    assert code == 0
+    code, out, err = run(capsys, "solve", str(scene), "--contact", "equality", "--json")
+    assert code == 1  # an answer, but a wall pulls: the documented exit status
+    assert "pulls" in err and len(err.strip().splitlines()) == 1
     data = json.loads(out)
     # u = g forced: the wall must pull with k·g − F, k = EA/L for the whole 1 m bar
     assert data["contact_force"][0] == pytest.approx(-(210e9 * 1e-3 * 1e-3 - 1000.0), rel=1e-12)
     assert data["physical"] is False and "pulls" in data["message"]
     code, out, _ = run(capsys, "solve", str(scene), "--json")
+    assert code == 0
     data = json.loads(out)
     assert data["contact_force"] == [0.0]
     # the free tip moves F L/(EA) = 1000/(210e6) m, so the gap stays open by g − that

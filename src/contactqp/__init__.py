@@ -14,15 +14,18 @@ from contactqp.errors import (
 from contactqp.methods import CONTACT_KINDS, METHODS, solve
 from contactqp.methods.qp import QPProblem, available_qp_solvers, qp_problem
 from contactqp.model import Model, build_model
-from contactqp.result import TOLERANCES, Result, Tolerances, check
+from contactqp.result import GUARANTEE, TOLERANCES, Result, Tolerances, check
 from contactqp.scene import (
+    UNIT_SYSTEMS,
     Bar,
     BarContact,
     DistributedLoad,
     Load,
     Scene,
     Support,
+    Units,
     Wall,
+    convert_units,
     load_scene,
     minimal,
     scene_from_dict,
@@ -34,10 +37,11 @@ from contactqp.scene import (
 __version__ = "0.1.0"
 
 __all__ = [
-    "CONTACT_KINDS", "METHODS", "TOLERANCES", "Bar", "BarContact", "ContactqpError",
+    "CONTACT_KINDS", "GUARANTEE", "METHODS", "TOLERANCES", "UNIT_SYSTEMS", "Bar", "BarContact",
+    "ContactqpError",
     "DistributedLoad", "Load", "LoadPath", "Model", "OptionError", "QPProblem", "Result", "Scene",
-    "SceneError", "SolverError", "SolverNotAvailable", "Support", "Tolerances", "Wall",
-    "__version__", "available_qp_solvers", "build_model", "check", "first_contact_factor",
+    "SceneError", "SolverError", "SolverNotAvailable", "Support", "Tolerances", "Units", "Wall",
+    "__version__", "available_qp_solvers", "build_model", "check", "convert_units", "first_contact_factor",
     "load_path", "load_scene", "minimal", "qp_problem", "scene_from_dict", "scene_to_toml",
     "seed_scene", "solve", "wall_at_every_node",
 ]

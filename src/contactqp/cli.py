@@ -1,5 +1,12 @@
 """Command line: ``contactqp`` (every method on the default scene), ``solve``, ``penalty-sweep``,
-``curve``, ``solvers``. Bad input ends with one line on stderr naming the field and the value, exit 2."""
+``curve``, ``solvers``.
+
+Exit status (:data:`EXIT_CODES`): 0 when every answer asked for is verified and physical (for
+the studies ``compare``, ``penalty-sweep`` and ``curve``, which show failing runs on purpose:
+when their table was produced); 1 when ``solve`` computed an answer that fails its check or
+has a wall pulling (the reason on stderr); 2 for bad input or options (one line naming the
+field and the value); 3 for an unexpected error, which is a bug (one line, and where to report
+it). Nothing prints a traceback."""
 
 from __future__ import annotations
 
@@ -18,6 +25,15 @@ from contactqp.scene import Scene, load_scene, seed_scene
 from contactqp.studies import PenaltySweep, Run, compare, mesh_convergence, penalty_sweep
 
 DEFAULT_OUT = "contactqp-out"
+OK, NOT_VERIFIED, BAD_INPUT, BUG = 0, 1, 2, 3
+EXIT_CODES = {
+    OK: "every answer asked for is verified and physical (a study: its table was produced)",
+    NOT_VERIFIED: "solve: the answer fails its check or a wall pulls (the reason on stderr)",
+    BAD_INPUT: "bad input or options (one line naming the field and the value)",
+    BUG: "an unexpected error inside contactqp: a bug, please report it",
+}
+STUDY_EXIT = ("exit status 0 when the table is produced, even where some runs fail their "
+              "check: showing where each method fails is the point")
 
 
 def _scene(path: str | None) -> Scene:
@@ -33,8 +49,11 @@ def _largest_residual(result: Result) -> float:
 
 
 def table(runs: list[Run]) -> str:
-    """The comparison table: one row per method and contact kind."""
-    header = ("method", "contact", "contact force (N)", "penetration (m)", "support reaction (N)",
+    """The comparison table: one row per method and contact kind, in the scene's units."""
+    scene = next((run.result.scene for run in runs if run.result is not None), None)
+    unit = (scene or seed_scene()).unit
+    header = ("method", "contact", f"contact force ({unit.force})",
+              f"penetration ({unit.length})", f"support reaction ({unit.force})",
               "residual", "verified", "time (ms)")
     rows = []
     for run in runs:
@@ -90,11 +109,12 @@ def command_compare(args: argparse.Namespace) -> int:
     print(table(runs))
     for line in notes(runs):
         print(f"note: {line}")
-    reference = next(r.result for r in runs if r.label == "lagrange" and r.result is not None)
-    if not args.no_charts:
-        for path in _write_charts(reference, penalty_sweep(scene), Path(args.out)):
+    answers = [r.result for r in runs if r.result is not None]
+    shown = next((r for r in answers if r.verified and r.physical), answers[0] if answers else None)
+    if not args.no_charts and shown is not None:
+        for path in _write_charts(shown, penalty_sweep(scene), Path(args.out)):
             print(f"chart: {path}")
-    return 0 if all(r.result is not None for r in runs) else 1
+    return OK
 
 
 def _qp_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -108,6 +128,8 @@ def command_solve(args: argparse.Namespace) -> int:
     if args.penalty is not None:
         options["penalty"] = args.penalty
     options.update(_qp_options(args))
+    if args.verbose:
+        options["verbose"] = True
     result = solve(_scene(args.scene), args.method, args.contact, args.formulation, **options)
     if args.json:
         print(result.to_json())
@@ -115,7 +137,10 @@ def command_solve(args: argparse.Namespace) -> int:
         print(table([Run(result.label, result.contact, result)]))
         for line in notes([Run(result.label, result.contact, result)]):
             print(f"note: {line}")
-    return 0
+    if result.verified and result.physical:
+        return OK
+    print(f"contactqp: the answer is not verified: {result.message}", file=sys.stderr)
+    return NOT_VERIFIED
 
 
 def command_penalty_sweep(args: argparse.Namespace) -> int:
@@ -132,22 +157,32 @@ def command_penalty_sweep(args: argparse.Namespace) -> int:
             "verified": [r.result is not None and r.result.verified for r in sweep.runs],
             "reference_contact_force": sweep.reference.contact_force.tolist(),
             "converged_up_to": float(sweep.penalties[sweep.best]),
+            "augmented_force_error": [v if np.isfinite(v) else None
+                                      for v in sweep.augmented_error.tolist()],
+            "augmented_iterations": sweep.augmented_iterations.tolist(),
+            "augmented_verified": [r.result is not None and r.result.verified
+                                   for r in sweep.augmented_runs],
+            "units": scene.units,
         }, indent=2))
-        return 0
+        return OK
+    unit = scene.unit
     print(f"penalty sweep, {scene.name}, {args.contact} contact; Lagrange contact force "
-          f"{_values(sweep.reference.contact_force, 10)} N")
-    print(f"{'ε (N/m)':>9}  {'contact force (N)':>20}  {'penetration (m)':>16}  "
-          f"{'force error':>11}  verified")
-    for eps, run, error in zip(sweep.penalties, sweep.runs, sweep.force_error):
+          f"{_values(sweep.reference.contact_force, 10)} {unit.force}")
+    print(f"{'ε (' + unit.stiffness + ')':>9}  {'contact force (' + unit.force + ')':>20}  "
+          f"{'penetration (' + unit.length + ')':>16}  {'force error':>11}  verified  "
+          f"{'augmented':>11}  updates")
+    rows = zip(sweep.penalties, sweep.runs, sweep.force_error, sweep.augmented_error,
+               sweep.augmented_iterations)
+    for eps, run, error, augmented, updates in rows:
         if run.result is None:
             print(f"{eps:9.0e}  failed: {run.error}")
             continue
         r = run.result
         print(f"{eps:9.0e}  {_values(r.contact_force, 10):>20}  {_values(r.penetration, 4):>16}  "
-              f"{error:11.2e}  {'yes' if r.verified else 'NO'}")
+              f"{error:11.2e}  {'yes' if r.verified else 'NO':<8}  {augmented:11.2e}  {updates}")
     print(sweep.summary())
     _chart(args, "plot_penalty_sweep", "penalty_sweep.png", sweep)
-    return 0
+    return OK
 
 
 def _chart(args: argparse.Namespace, function: str, name: str, *data: Any) -> None:
@@ -167,10 +202,11 @@ def command_curve(args: argparse.Namespace) -> int:
     path = load_path(scene, steps=args.steps)
     if args.json:
         print(json.dumps(path.to_dict(), indent=2))
-        return 0
+        return OK
     kink = first_contact_factor(scene)
-    print(f"load path, {scene.name}: displacement of node {path.load_node} (mm) against the "
-          f"load factor; first contact closes at t = {kink:.6g} (closed form)")
+    print(f"load path, {scene.name}: displacement of node {path.load_node} "
+          f"({scene.unit.length}) against the load factor; first contact closes at "
+          f"t = {kink:.6g} (closed form)")
     names = list(path.methods)
     print(f"{'t':>7}  " + "  ".join(f"{n:>14}" for n in names))
     for i, t in enumerate(path.load_factor):
@@ -178,13 +214,13 @@ def command_curve(args: argparse.Namespace) -> int:
         for n in names:
             m = path.methods[n]
             mark = "" if m.verified[i] and m.physical[i] else "!"
-            cells.append(f"{1e3 * m.load_point_displacement[i]:13.6g}{mark or ' '}")
+            cells.append(f"{m.load_point_displacement[i]:13.6g}{mark or ' '}")
         print(f"{t:7.4f}  " + "  ".join(cells))
     if any(not (m.verified.all() and m.physical.all()) for m in path.methods.values()):
         print("! the step's Result failed its check or a wall pulls (equality contact before the "
               "wall is reached; a soft penalty's penetration)")
     _chart(args, "plot_load_path", "load_path.png", path, kink)
-    return 0
+    return OK
 
 
 def command_solvers(args: argparse.Namespace) -> int:
@@ -198,7 +234,7 @@ def command_solvers(args: argparse.Namespace) -> int:
               f"{r.install}".rstrip())
     print(f"default: --method qp --backend {DEFAULT_BACKEND}; the comparison table runs every "
           "installed pair")
-    return 0
+    return OK
 
 
 class _Parser(argparse.ArgumentParser):
@@ -209,38 +245,52 @@ class _Parser(argparse.ArgumentParser):
 def parser() -> argparse.ArgumentParser:
     top = _Parser(prog="contactqp", description="Contact of elastic bars by Lagrange "
                   "multipliers, penalty and QP solvers. With no command: every method on the "
-                  "default scene, one comparison table and charts.")
+                  "default scene, one comparison table and charts.",
+                  epilog="exit status: " + "; ".join(f"{code}: {text}"
+                                                     for code, text in EXIT_CODES.items()))
     top.add_argument("--out", default=DEFAULT_OUT, help="folder for charts (default %(default)s)")
     top.add_argument("--no-charts", action="store_true", help="write no PNG files")
     top.set_defaults(handler=command_compare, scene=None)
     commands = top.add_subparsers(dest="command", parser_class=_Parser)
 
-    def scene_command(name: str, handler, help_text: str) -> argparse.ArgumentParser:
-        sub = commands.add_parser(name, help=help_text, description=help_text)
+    def scene_command(name: str, handler, help_text: str,
+                      epilog: str | None = None) -> argparse.ArgumentParser:
+        sub = commands.add_parser(name, help=help_text, description=help_text, epilog=epilog)
         sub.add_argument("scene", nargs="?", help="scene TOML file (default: the default scene)")
         sub.add_argument("--out", default=DEFAULT_OUT, help="folder for charts")
         sub.add_argument("--no-charts", action="store_true", help="write no PNG files")
         sub.set_defaults(handler=handler)
         return sub
 
-    scene_command("compare", command_compare, "every method on a scene, one table")
-    solve_parser = scene_command("solve", command_solve, "solve a scene by one method")
+    scene_command("compare", command_compare, "every method on a scene, one table",
+                  STUDY_EXIT)
+    solve_parser = scene_command(
+        "solve", command_solve, "solve a scene by one method",
+        "exit status 0 when the answer is verified and physical, 1 when it fails its check or "
+        "a wall pulls (the reason on stderr), 2 for bad input")
     solve_parser.add_argument("--method", default="lagrange", choices=list(METHODS))
     solve_parser.add_argument("--contact", default="inequality", choices=CONTACT_KINDS)
     solve_parser.add_argument("--formulation", default="full", choices=FORMULATIONS,
                               help="full, condensed (contact nodes only) or strain (lagrange, qp)")
-    solve_parser.add_argument("--penalty", type=float, help="penalty ε (N/m), method penalty")
+    solve_parser.add_argument("--penalty", type=float,
+                              help="penalty ε (force per length in the scene's units; default "
+                                   "1e8 x the stiffness the walls see), methods penalty and "
+                                   "augmented; the textbook's is 1e14 (N/m)")
     solve_parser.add_argument("--backend", help="QP backend, method qp (see contactqp solvers)")
     solve_parser.add_argument("--solver", help="QP solver of the backend, method qp")
     solve_parser.add_argument("--accuracy", choices=("default", "high"), help="method qp")
     solve_parser.add_argument("--scale", choices=("on", "off"), help="non-dimensionalise the QP")
     solve_parser.add_argument("--json", action="store_true", help="print the Result as JSON")
+    solve_parser.add_argument("--verbose", action="store_true",
+                              help="let the QP solver print its progress")
     sweep_parser = scene_command("penalty-sweep", command_penalty_sweep,
-                                 "penetration and contact force for ε = 1, 1e5, 1e6 … 1e20")
+                                 "penetration and contact force for ε = 1, 1e5, 1e6 … 1e20 N/m",
+                                 STUDY_EXIT)
     sweep_parser.add_argument("--contact", default="inequality", choices=CONTACT_KINDS)
     sweep_parser.add_argument("--json", action="store_true", help="print the sweep as JSON")
     curve_parser = scene_command("curve", command_curve,
-                                 "force-displacement curve: the loads stepped from 0 to 1")
+                                 "force-displacement curve: the loads stepped from 0 to 1",
+                                 STUDY_EXIT)
     curve_parser.add_argument("--steps", type=int, default=21,
                               help="load factors from 0 to 1, both included (default %(default)s)")
     curve_parser.add_argument("--json", action="store_true", help="print the curves as JSON")
@@ -255,10 +305,23 @@ def main(argv: list[str] | None = None) -> int:
         return args.handler(args)
     except ContactqpError as error:
         print(f"contactqp: error: {error}", file=sys.stderr)
-        return 2
+        return BAD_INPUT
     except BrokenPipeError:  # output piped into head & co.: stop quietly
         sys.stderr.close()
-        return 0
+        return OK
+    except KeyboardInterrupt:
+        print("contactqp: interrupted", file=sys.stderr)
+        return 130
+    except Exception as error:  # noqa: BLE001 - a bug: one line, never a traceback
+        where = error.__traceback__
+        while where is not None and where.tb_next is not None:
+            where = where.tb_next
+        place = "" if where is None else (f" at {Path(where.tb_frame.f_code.co_filename).name}:"
+                                          f"{where.tb_lineno}")
+        print(f"contactqp: internal error: {type(error).__name__}: {error}{place}. This is a bug "
+              "in contactqp; please report it with the command and the scene file.",
+              file=sys.stderr)
+        return BUG
 
 
 if __name__ == "__main__":

@@ -116,6 +116,53 @@ class Model:
     def n_free(self) -> int:
         return int(self.free.size)
 
+    @cached_property
+    def free_displacement(self) -> np.ndarray:
+        """K⁻¹P (free nodes): the displacement the loads cause with no contact at all."""
+        return self.solve_K(self.P)
+
+    def solve_K_and_loads(self, rhs: np.ndarray) -> np.ndarray:
+        """K⁻¹ rhs (columns), with K⁻¹P (:attr:`free_displacement`) from the same
+        factorisation when it is not known yet."""
+        if "free_displacement" in self.__dict__:
+            return self.solve_K(rhs)
+        rhs = np.asarray(rhs, dtype=float)
+        solved = self.solve_K(np.column_stack((rhs, self.P)))
+        self.__dict__["free_displacement"] = solved[:, -1]
+        return solved[:, :-1] if rhs.ndim == 2 else solved[:, 0]
+
+    @cached_property
+    def force_scale(self) -> float:
+        """F: the scene's force scale, from the loads and the prescribed gaps alone (never from
+        an answer): the largest force the loads put through any cut of a bar
+        (:func:`load_force_scale`), and for a wall that starts past its node (gap < 0) the
+        force that pushes the node back, |gap| × the stiffness it sees with the supports held.
+        In a scene that nothing loads (the answer is u = 0, λ = 0) it is the softest
+        element's stiffness times :attr:`displacement_scale`."""
+        walls = self.g[: len(self.scene.walls)]
+        press = np.flatnonzero(walls < 0.0)
+        pushed_back = 0.0
+        if press.size:
+            nodes = self.scene.contact_rows[1][press]
+            stiffness = seen_stiffness(self.scene, np.zeros(0, dtype=np.intp), nodes)
+            pushed_back = float(np.max(-walls[press] * stiffness))
+        scale = max(load_force_scale(self.scene), pushed_back)
+        if scale > 0.0:
+            return scale
+        return float(self.scene.stiffness.min()) * self.displacement_scale
+
+    @cached_property
+    def displacement_scale(self) -> float:
+        """U: the scene's displacement scale, from the loads and the prescribed gaps alone:
+        the largest displacement the loads cause with no contact, ‖K⁻¹P‖∞, or the deepest
+        press fit (largest −gap), whichever is larger. In a scene that nothing loads, the
+        widest gap, or with none the longest bar."""
+        scale = max(_largest(self.free_displacement), float(np.max(-self.g, initial=0.0)))
+        if scale > 0.0:
+            return scale
+        widest = _largest(self.g)
+        return widest if widest > 0.0 else max(float(b.lengths.sum()) for b in self.scene.bars)
+
     @property
     def n_contacts(self) -> int:
         """Contact rows: one per wall, then one per bar contact."""
@@ -186,6 +233,47 @@ def slot_forces(scene: Scene, forces: np.ndarray) -> np.ndarray:
     if not scene.junctions.size:
         return forces
     return np.insert(forces, scene.junctions - np.arange(scene.junctions.size), 0.0)
+
+
+def _largest(values: np.ndarray) -> float:
+    """∞-norm (0 for no values; inf when any value is not finite)."""
+    values = np.asarray(values, dtype=float)
+    if values.size == 0:
+        return 0.0
+    largest = max(float(values.max()), -float(values.min()))
+    return largest if np.isfinite(largest) else np.inf
+
+
+def load_force_scale(scene: Scene) -> float:
+    """The largest force the scene's loads put through any cut of a bar (N): over every bar
+    and every node, the resultant of the loads (point and distributed) on either side, and
+    every nodal load itself. A distributed load counts whole, not per node."""
+    loads = scene.nodal_loads()
+    offsets = scene.node_offsets
+    sizes = np.diff(offsets)
+    left = np.cumsum(loads)
+    left -= np.repeat(np.r_[0.0, left[offsets[1:-1] - 1]], sizes)  # from each bar's node 0
+    right = np.repeat(left[offsets[1:] - 1], sizes) - left
+    return max(_largest(left), _largest(right), _largest(loads))
+
+
+def seen_stiffness(scene: Scene, held: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """The stiffness (N/m) each of ``nodes`` (global) sees with the supports and the nodes
+    ``held`` fixed: 1/c_left + 1/c_right, c the compliance Σ L/(EA) to the nearest fixed node
+    on that side in the same bar (no term when there is none; a node does not hold itself)."""
+    offsets = scene.node_offsets
+    phi = scene.compliance
+    fixed = np.unique(np.concatenate((scene.support_nodes, np.asarray(held, dtype=np.intp))))
+    fixed_bar = np.searchsorted(offsets, fixed, side="right") - 1
+    node_bar = np.searchsorted(offsets, nodes, side="right") - 1
+    stiffness = np.zeros(nodes.size)
+    for neighbour, sign in ((np.searchsorted(fixed, nodes, side="left") - 1, 1.0),
+                            (np.searchsorted(fixed, nodes, side="right"), -1.0)):
+        near = (neighbour >= 0) & (neighbour < fixed.size)
+        near[near] &= fixed_bar[neighbour[near]] == node_bar[near]
+        compliance = sign * (phi[nodes[near]] - phi[fixed[neighbour[near]]])
+        stiffness[near] += 1.0 / compliance
+    return stiffness
 
 
 def contact_matrix(scene: Scene) -> sp.csr_array:
@@ -313,6 +401,7 @@ def condense(model: Model) -> Condensed:
     rhs[:, 0] = model.P
     rhs[nodes, np.arange(1, nodes.size + 1)] = 1.0
     solved = model.solve_K(rhs)
+    model.__dict__.setdefault("free_displacement", solved[:, 0])  # K⁻¹P, for the check
     flexibility = solved[nodes, 1:]
     try:
         stiffness = sla.inv(flexibility, check_finite=False) if nodes.size else flexibility

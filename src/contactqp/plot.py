@@ -27,7 +27,7 @@ def plot_bar(result: Result, ax: Axes | None = None, magnification: float | None
     largest = max(float(np.abs(result.u).max()), max((w.gap for w in result.scene.walls), default=0))
     if magnification is None:
         magnification = 0.1 * x[-1] / largest if largest > 0 else 1.0
-    half = np.sqrt(scene.areas / np.pi)  # radius of the equivalent circle (m)
+    half = np.sqrt(scene.areas / np.pi)  # radius of the equivalent circle
     depth = 2.5 * half.max()
     for row, (nodes, colour, name) in enumerate(
         ((x, "0.75", "undeformed"), (x + magnification * result.u, "tab:blue", "deformed"))
@@ -50,7 +50,8 @@ def plot_bar(result: Result, ax: Axes | None = None, magnification: float | None
                 label="support" if s is result.scene.supports[0] else None)
     ax.set_xlim(x[0] - 0.05 * x[-1], x[-1] * 1.05 + magnification * largest)
     ax.set_ylim(bottom * 1.2, top * 1.6)
-    ax.set_xlabel(f"x (m); displacements and gaps magnified ×{magnification:.3g}")
+    ax.set_xlabel(f"x ({scene.unit.length}); displacements and gaps magnified "
+                  f"×{magnification:.3g}")
     ax.set_yticks([])
     ax.set_title(f"{result.scene.name}: {result.label}, {result.contact} contact")
     ax.legend(loc="lower right", fontsize=8, ncols=4)
@@ -65,8 +66,9 @@ def plot_penalty_sweep(sweep: PenaltySweep) -> Figure:
     eps = sweep.penalties
     ok = np.isfinite(sweep.penetration) & (sweep.penetration > 0)
     left.loglog(eps[ok], sweep.penetration[ok], "o-", color="tab:blue")
-    left.set_xlabel("penalty ε (N/m)")
-    left.set_ylabel("largest penetration (m)")
+    unit = sweep.reference.scene.unit
+    left.set_xlabel(f"penalty ε ({unit.stiffness})")
+    left.set_ylabel(f"largest penetration ({unit.length})")
     left.set_title("penalty: penetration ≈ λ/ε")
     floor = 1e-17  # errors of exactly 0 are drawn here, on a log axis
     for errors, style, name in ((sweep.force_error, "s--", "penalty"),
@@ -80,7 +82,7 @@ def plot_penalty_sweep(sweep: PenaltySweep) -> Figure:
     right.axvline(eps[sweep.best], color="0.5", linestyle=":")
     right.annotate("round-off takes over → ", (eps[sweep.best], 1.0), fontsize=8, va="top",
                    ha="right", color="0.3")
-    right.set_xlabel("penalty ε (N/m)")
+    right.set_xlabel(f"penalty ε ({unit.stiffness})")
     right.set_ylabel("relative contact-force error vs Lagrange")
     right.set_title("force error (numbers: augmented updates)")
     right.legend(fontsize=8)
@@ -112,12 +114,12 @@ def plot_load_path(path: LoadPath, kink: float | None = None, ax: Axes | None = 
     styles = {"lagrange": "k-", "equality": "r--", "penalty": "g-.", "augmented": "c:",
               "qp": "bx", "soft penalty": "m-"}
     for name, method in path.methods.items():
-        ax.plot(path.load_factor, 1e3 * method.load_point_displacement,
+        ax.plot(path.load_factor, method.load_point_displacement,
                 styles.get(name, "o-"), label=name, markersize=5, linewidth=1.5)
     if kink is not None and np.isfinite(kink):
         ax.axvline(kink, color="0.5", linestyle=":", label=f"first contact, closed form t = {kink:.4g}")
     ax.set_xlabel("load factor (× the scene's loads)")
-    ax.set_ylabel(f"displacement of node {path.load_node} (mm)")
+    ax.set_ylabel(f"displacement of node {path.load_node} ({path.scene.unit.length})")
     ax.set_title(f"load path: {path.scene.name}")
     ax.legend(fontsize=8)
     return ax

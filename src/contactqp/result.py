@@ -2,38 +2,45 @@
 
 A method hands back its displacements and contact forces (a :class:`Solution`); everything
 else is derived here from those two alone, the same way for every method, and checked against
-the scene: equilibrium at every node, feasibility at every wall, complementarity and the sign of
-every contact force. No solver's own status is trusted; it is recorded beside the check.
+the model. No solver's own status is trusted; it is recorded beside the check.
 
-Residuals (all dimensionless, ∞-norms):
-    equilibrium      section equilibrium: at every cut through the bar, the element force from u
-                     against the force that the loads, walls (W) and supports (R) on one side
-                     need: ‖cumsum(K u − P − R − W)‖ / F, F the largest nodal force term
-                     and at least the force the scene makes: the largest load, and
-                     k_min × |gap| of a wall that starts past its node. cumsum(K u) is minus
-                     the element forces, so it is evaluated run by run between loaded nodes
-                     (:func:`section_residual`). The last cut is the balance of the whole bar. A per-node residual is not enough: n
-                     residuals within tolerance add up along a long bar (OSQP on a
+What ``verified`` guarantees. The check reads an answer (u, λ) as the exact answer of a nearby
+scene: the contacts that push are held where the answer puts them (their gaps moved by as much
+as the answer penetrates or stands off there), the force on every other contact, and every
+pulling force, is moved off it as a load, and what equilibrium leaves over is a load too. It
+then works out, run by run between the held nodes, what those moves do to the forces and the
+displacements: :attr:`Check.force_error_bound` (N) bounds the error of every contact force and
+reaction, :attr:`Check.displacement_error_bound` (m) the error of every displacement. Verified,
+every residual is within :data:`TOLERANCES`: the force bound is at most 1e-5·F and the
+displacement bound at most 1e-5·U (:data:`GUARANTEE`). F and U come from the loads and the
+prescribed gaps alone (:attr:`contactqp.model.Model.force_scale`,
+:attr:`~contactqp.model.Model.displacement_scale`), never from the answer being judged. The
+bounds are exact to first order within the answer's own set of pushing contacts; property
+tests hold every method and solver to them against the exact reference on thousands of random
+scenes (tests/test_guarantee.py, benchmarks/guarantee.py).
+
+Residuals (dimensionless; s_i is the stiffness row i sees with the supports and the pushing
+contacts held, :func:`contactqp.model.seen_stiffness`, a bar contact its two nodes' in series;
+p_i = C_i u − g_i the penetration, gap_i = −p_i):
+    equilibrium      max over every cut through every bar of |N_j + E_j| / F: N_j the element
+                     force from u, E_j the outside forces (loads, contacts, supports) on the
+                     nodes before the cut; the last cut is the balance of the whole scene.
+                     A per-node residual would let n errors add up along a long bar (OSQP on a
                      10⁴-element bar: 8e-7 per node, 0.56 % in the contact force)
-    feasibility      inequality: max(0, max penetration) / U; equality: max |penetration| / U,
-                     U the displacement scale max(‖u‖, F / k_max): the last term, F over
-                     the stiffest element, keeps U physical when the exact answer is u = 0
-                     (a closed zero gap) and ‖u‖ is round-off. Open gaps are not scales: a
-                     far wall would hide a wrong force at a near one (measured: Clarabel,
-                     81 N on a 1 N load pulling away from a zero-gap wall, once "verified"
-                     because a second wall 0.19 mm away set U). Only in a scene with no
-                     loads and no wall past its node (u = 0, λ = 0 exactly) do the gaps set
-                     U, and k_min × largest gap F
-    complementarity  max min(λᵢ⁺, gapᵢ⁺ · sᵢ) / F, gap = −penetration, x⁺ = max(x, 0)
-                     (inequality contact): a wall may push or stand off, not both. A wall's
-                     gap counts as the force it takes to close it, sᵢ the stiffness its node
-                     sees with the supports and the pushing walls held (seen_stiffness; a bar
-                     contact keeps sᵢ = F / U). With gap / U a wall's force could move to its
-                     neighbour on a fine mesh unseen (Clarabel, 10⁵ walls: 3e-3 of the largest
-                     force, verified). The product λᵢ·penetrationᵢ / (F·U)
-                     is weaker: on a weakly active wall (zero gap, zero force) it passed a
-                     QP answer 1.4e-4 F off (each factor ~1e-4, the product 1e-8)
-    sign             max(0, −min λ) / F: how hard a wall pulls   (inequality contact)
+    feasibility      max p_i⁺ · s_i / F: the force it takes to push a penetrating node back
+                     (equality contact: |p_i| · s_i). Measured against the displacement
+                     instead, the penalty passed 2 % off where a stiff element holds the wall
+                     and a soft stretch elsewhere makes u large
+    complementarity  max min(λ_i⁺, gap_i⁺ · s_i) / F: a contact may push or stand off, not
+                     both; a gap counts as the force it takes to close it (with gap / U, a
+                     force moved to a neighbouring wall on a fine mesh passed unseen); and
+                     min(λ₊, λ₋) of a node pushed from both sides
+    sign             max λ_i⁻ / F: how hard a wall pulls
+    force            force_error_bound / F: all of the above carried through the runs (small
+                     forces left on many open walls add up where they land)
+    displacement     displacement_error_bound / U. A force left on a weakly active wall (zero
+                     gap, zero exact force) beside a soft element passes every force residual
+                     and can still move the bar far more than its share of U
 """
 
 from __future__ import annotations
@@ -45,29 +52,40 @@ from typing import Any
 
 import numpy as np
 
-from contactqp.model import Model, element_forces, penetration, slot_forces, wall_forces
+from contactqp.model import (
+    Model,
+    build_model,
+    element_forces,
+    penetration,
+    seen_stiffness,
+    slot_forces,
+    wall_forces,
+)
 from contactqp.scene import Scene
-
-_TINY = 1e-300
 
 
 @dataclass(frozen=True)
 class Tolerances:
     """Largest residuals a verified Result may have (dimensionless, see the module docstring).
 
-    The explicit Lagrange method reaches ~1e-15. Equilibrium and sign are held to 1e-6 of the
-    force scale. Feasibility and complementarity are held to 1e-5 of the displacement scale
-    (10 nm on the default scene): that accepts the textbook penalty ε = 1e14, which leaves
-    1.8e-6 there, and rejects ε <= 1e13 and first-order QP solvers at loose settings.
+    The explicit Lagrange method reaches ~1e-15. Equilibrium and sign are held to 1e-6 of F;
+    feasibility, complementarity and displacement to 1e-5 (of F, F and U).
     """
 
     equilibrium: float = 1e-6
     feasibility: float = 1e-5
     complementarity: float = 1e-5
     sign: float = 1e-6
+    force: float = 1e-5
+    displacement: float = 1e-5
 
 
 TOLERANCES = Tolerances()
+
+# A held node moved by δ changes its own force by δ·s and each neighbour's by at most δ·s
+GAP_WEIGHT = 3.0
+# What ``verified`` guarantees, relative to F and U (module docstring)
+GUARANTEE = (TOLERANCES.force, TOLERANCES.displacement)
 
 
 @dataclass(frozen=True)
@@ -86,12 +104,17 @@ class Solution:
 
 @dataclass(frozen=True)
 class Check:
-    """The independent check of a Result."""
+    """The independent check of a Result: the residuals (module docstring), whether all are
+    within tolerance, whether no wall pulls, what failed, and the error bounds they give."""
 
     residuals: dict[str, float | None]
     verified: bool
     physical: bool
     message: str
+    force_error_bound: float  # N: every contact force and reaction within this of exact
+    displacement_error_bound: float  # m: every displacement within this of exact
+    force_scale: float  # F (N)
+    displacement_scale: float  # U (m)
 
 
 def external_forces(scene: Scene, contact_force: np.ndarray,
@@ -112,87 +135,214 @@ def external_forces(scene: Scene, contact_force: np.ndarray,
     return all_nodes, forces, int(loads.size)
 
 
-def check(scene: Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.ndarray,
+def check(scene: Scene | Model, u: np.ndarray, contact_force: np.ndarray, reactions: np.ndarray,
           contact: str, tolerances: Tolerances = TOLERANCES,
           element_force: np.ndarray | None = None) -> Check:
-    """Check displacements (m, every node) and forces (N) against the scene, independently of
-    how they were found. ``contact`` is "inequality" or "equality". ``element_force``: the
-    element forces k_e·(u_(e+1) − u_e) when the caller has them already (else computed)."""
+    """Check displacements (m, every node) and forces (N) against the scene (or its model),
+    independently of how they were found. ``contact`` is "inequality" or "equality".
+    ``element_force``: the element forces k_e·(u_(e+1) − u_e) when the caller has them."""
+    model = scene if isinstance(scene, Model) else build_model(scene)
+    scene = model.scene
+    if contact not in ("inequality", "equality"):
+        from contactqp.errors import OptionError
+        raise OptionError(f"contact must be inequality or equality; got {contact!r}")
+    u = np.asarray(u, dtype=float).reshape(-1)
+    lam = np.asarray(contact_force, dtype=float).reshape(-1)
+    reactions = np.asarray(reactions, dtype=float).reshape(-1)
+    _shape("u", u, scene.n_nodes)
+    _shape("contact_force", lam, scene.n_contacts)
+    _shape("reactions", reactions, len(scene.supports))
+    F, U = model.force_scale, model.displacement_scale
     forces = element_forces(scene, u) if element_force is None else element_force
-    nodes, external, n_loads = external_forces(scene, contact_force, reactions)
-    load_scale = _norm(external[:n_loads])
-    gaps = scene.gaps
-    # What makes forces: the loads, and walls that start past their node (k·|gap|, k the
-    # softest element). Only when neither does (exact answer u = 0, every computed force
-    # round-off) do the gaps set the scales. Open gaps otherwise stay out: a far wall's gap
-    # would make U and F large and hide a wrong force at a near one.
-    k_min, k_max = float(scene.stiffness.min()), float(scene.stiffness.max())
-    source = max(load_scale, k_min * float(np.max(-gaps, initial=0.0)))
-    unloaded = _norm(gaps) if source == 0.0 else 0.0
-    force_scale = max(_norm(external), _norm(forces), source, k_min * unloaded, _TINY)
-    disp_scale = max(_norm(u), force_scale / k_max, unloaded, _TINY)
-    # section equilibrium: cutting element j leaves nodes 0..j, held by the outside forces on
-    # them and the element's pull N_j; past the last node the cut is the whole bar's balance
-    # (between bars no element joins the nodes: the cut there is the balance of the bars before)
-    equilibrium = section_residual(slot_forces(scene, forces), nodes, external) / force_scale
-    lam = np.asarray(contact_force, dtype=float)
-    pen = penetration(scene, u)
-    pulling = float(np.max(-lam, initial=0.0)) / force_scale  # NaN stays NaN: not physical
-    if contact == "equality":
-        feasibility = _norm(pen) / disp_scale
-        residuals = {"equilibrium": equilibrium, "feasibility": feasibility,
-                     "complementarity": None, "sign": None}
-    else:
-        feasibility = max(0.0, float(pen.max(initial=0.0))) / disp_scale
-        # the natural residual min(λ, gap·s)/F per wall, not a product λ·gap (module
-        # docstring); pulling and penetrating are the sign and feasibility residuals
-        gap_force = np.maximum(-pen, 0.0) * force_scale / disp_scale
-        n_walls = len(scene.walls)
-        if n_walls:
-            wall_nodes = scene.contact_rows[1][:n_walls]
-            pushing = wall_nodes[lam[:n_walls] > tolerances.complementarity * force_scale]
-            gap_force[:n_walls] = (np.maximum(-pen[:n_walls], 0.0)
-                                   * seen_stiffness(scene, pushing, wall_nodes))
-        complementarity = _norm(np.minimum(np.maximum(lam, 0.0), gap_force)) / force_scale
-        residuals = {"equilibrium": equilibrium, "feasibility": feasibility,
-                     "complementarity": complementarity, "sign": pulling}
-    if not (math.isfinite(force_scale) and math.isfinite(disp_scale)):
-        # a NaN or infinite u, λ or reaction: no scale, so no residual can pass
-        residuals = {name: (None if value is None else math.inf)
-                     for name, value in residuals.items()}
+    slots = slot_forces(scene, forces)
+    nodes, external, _ = external_forces(scene, lam, reactions)
+    finite = all(np.isfinite(a).all() for a in (u, lam, reactions))
+    if not finite:  # a NaN or infinite answer: no residual can pass
+        return _failed(scene, contact, lam, F, U, tolerances)
+    r_max = section_residual(slots, nodes, external)
+    bounds = error_bounds(scene, u, lam, slots, nodes, external, r_max, contact, F, U, tolerances)
+    residuals = {name: value for name, value in bounds.residuals.items()}
     failures = [
         f"{name} residual {value:.2e} > {getattr(tolerances, name):.0e}"
         for name, value in residuals.items()
-        if value is not None and not value <= getattr(tolerances, name)  # NaN fails too
+        if value is not None and not value <= getattr(tolerances, name)
     ]
+    pulling = float(np.max(-lam, initial=0.0)) / F
     physical = pulling <= tolerances.sign
     notes = list(failures)
-    if not physical and not np.isfinite(lam).all():
+    if not physical:
+        which = ", ".join(f"{_row_name(scene, i)} {lam[i]:.6g} N"
+                          for i in np.flatnonzero(lam < 0))
+        notes.append(f"non-physical: a wall pulls the bar ({which}); a rigid wall can only push")
+    return Check(residuals, not failures, physical, "; ".join(notes),
+                 bounds.force_error_bound, bounds.displacement_error_bound, F, U)
+
+
+def _shape(name: str, values: np.ndarray, size: int) -> None:
+    if values.size != size:
+        from contactqp.errors import OptionError
+        raise OptionError(f"{name} must have {size} values for this scene, got {values.size}")
+
+
+def _row_name(scene: Scene, row: int) -> str:
+    n_walls = len(scene.walls)
+    return f"wall[{row}]" if row < n_walls else f"contact[{row - n_walls}]"
+
+
+def _failed(scene: Scene, contact: str, lam: np.ndarray, F: float, U: float,
+            tolerances: Tolerances) -> Check:
+    """The Check of an answer with NaN or infinite values: every residual inf, not physical
+    when a contact force is not finite."""
+    names = ["equilibrium", "feasibility", "complementarity", "sign", "force", "displacement"]
+    skip = {"complementarity", "sign"} if contact == "equality" else set()
+    residuals = {name: (None if name in skip else math.inf) for name in names}
+    notes = [f"{name} residual inf > {getattr(tolerances, name):.0e}"
+             for name, value in residuals.items() if value is not None]
+    physical = bool(np.isfinite(lam).all()) and float(np.max(-lam, initial=0.0)) <= (
+        tolerances.sign * F)
+    if not physical:
         notes.append("non-physical: contact forces are not finite (the solver returned no "
                      "answer)")
-    elif not physical:
-        which = ", ".join(f"wall[{i}] {lam[i]:.6g} N" for i in np.flatnonzero(lam < 0))
-        notes.append(f"non-physical: a wall pulls the bar ({which}); a rigid wall can only push")
-    return Check(residuals, not failures, physical, "; ".join(notes))
+    return Check(residuals, False, physical, "; ".join(notes), math.inf, math.inf, F, U)
 
 
-def seen_stiffness(scene: Scene, held: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-    """The stiffness (N/m) each of ``nodes`` (global) sees with the supports and the nodes
-    ``held`` fixed: 1/c_left + 1/c_right, c the compliance Σ L/(EA) to the nearest fixed node
-    on that side in the same bar (no term when there is none)."""
+@dataclass(frozen=True)
+class Bounds:
+    residuals: dict[str, float | None]
+    force_error_bound: float
+    displacement_error_bound: float
+
+
+def error_bounds(scene: Scene, u: np.ndarray, lam: np.ndarray, slots: np.ndarray,
+                 nodes: np.ndarray, external: np.ndarray, r_max: float, contact: str,
+                 F: float, U: float, tolerances: Tolerances) -> Bounds:
+    """The residuals and the error bounds of an answer (module docstring).
+
+    The answer is exact for a nearby scene: the rows that push are held at where the answer
+    puts them (their gaps moved by δ = |penetration|), the other rows' forces and every
+    pulling force are moved off them as loads, and what equilibrium leaves over is a load too.
+    With the held nodes fixed, those loads' effect is computed exactly, run by run between
+    held nodes (:func:`propagate`); a held node moved by δ moves its runs by at most δ and
+    changes its own force by δ·s and each neighbour's by less (3·δ·s in all)."""
+    rows, row_nodes, _, gaps = scene.contact_rows
+    n_rows = gaps.size
+    pen = penetration(scene, u)
+    equality = contact == "equality"
+    if equality:
+        pushing = np.ones(n_rows, dtype=bool)
+    else:
+        held_rows = lam > tolerances.complementarity * F
+        held = np.concatenate((scene.support_nodes, row_nodes[held_rows[rows]]))
+        s = row_stiffness(scene, np.unique(held))
+        stand_off = np.maximum(-pen, 0.0)
+        pushing = lam > stand_off * s  # closing its gap is the smaller move
+    held = np.unique(np.concatenate((scene.support_nodes, row_nodes[pushing[rows]])))
+    s = row_stiffness(scene, held)
+    delta = np.abs(pen) if equality else np.where(pushing, np.abs(pen), np.maximum(pen, 0.0))
+    moved = np.where(pushing, 0.0, lam)  # an open row's force (or a pull) becomes a load
+    n_loads = external.size - row_nodes.size - scene.support_nodes.size
+    kept_external = external.copy()  # the contacts of the nearby scene carry only the rest
+    kept_external[n_loads:n_loads + row_nodes.size][~pushing[rows]] = 0.0
+    force_error, sway = propagate(scene, held, slots, nodes, kept_external)
+    pair = 0.0 if equality else _both_sides(scene, lam)
+    gap_force = _largest(delta * s)
+    force_bound = max(force_error, _largest(moved)) + GAP_WEIGHT * gap_force + pair
+    displacement_bound = sway + _largest(delta)
+    feasibility = _largest((np.abs(pen) if equality else np.maximum(pen, 0.0)) * s) / F
+    residuals: dict[str, float | None] = {"equilibrium": r_max / F, "feasibility": feasibility}
+    if equality:
+        residuals.update(complementarity=None, sign=None)
+    else:
+        natural = np.minimum(np.maximum(lam, 0.0), np.maximum(-pen, 0.0) * s)
+        residuals["complementarity"] = max(_largest(natural), pair) / F
+        residuals["sign"] = float(np.max(-lam, initial=0.0)) / F
+    residuals["force"] = force_bound / F
+    residuals["displacement"] = displacement_bound / U
+    return Bounds(residuals, force_bound, displacement_bound)
+
+
+def propagate(scene: Scene, held: np.ndarray, slots: np.ndarray, nodes: np.ndarray,
+              external: np.ndarray) -> tuple[float, float]:
+    """What the imbalance of an answer does with the ``held`` nodes (sorted) fixed: (the
+    largest force error at a held node, N; the largest displacement error, m).
+
+    r_j, the residual of cut j (element force from u against the outside forces ``external``
+    on the nodes before it), is a load pattern: its jumps are the nodal imbalances. Between
+    two held nodes the exact answer of the imbalanced scene has element forces N_j − (c − r_j)
+    ... i.e. its element force errors are c − r_j, with c such that the run's elongation
+    errors (c − r_j)/k_j add up to nothing; a run held at one end only (a bar's tail or head)
+    has c the cut residual past the bar's free end. The displacement error is the running sum
+    of the elongation errors from the held end, and a held node's force error is the jump of c
+    across it."""
     offsets = scene.node_offsets
-    phi = np.concatenate([bar.compliance_from_node_0 for bar in scene.bars])
-    fixed = np.unique(np.concatenate((scene.support_nodes, held)))
-    fixed_bar = np.searchsorted(offsets, fixed, side="right") - 1
-    node_bar = np.searchsorted(offsets, nodes, side="right") - 1
-    stiffness = np.zeros(nodes.size)
-    for neighbour, sign in ((np.searchsorted(fixed, nodes, side="left") - 1, 1.0),
-                            (np.searchsorted(fixed, nodes, side="right"), -1.0)):
-        near = (neighbour >= 0) & (neighbour < fixed.size)
-        near[near] &= fixed_bar[neighbour[near]] == node_bar[near]
-        compliance = sign * (phi[nodes[near]] - phi[fixed[neighbour[near]]])
-        stiffness[near] += 1.0 / compliance
-    return stiffness
+    outside = np.cumsum(np.bincount(nodes, external, minlength=scene.n_nodes))
+    k = scene.slot_stiffness
+    element = np.flatnonzero(k > 0.0)
+    if element.size == 0:
+        return 0.0, 0.0
+    r = (slots + outside[:-1])[element]
+    flexibility = 1.0 / k[element]
+    bar = np.searchsorted(offsets, element, side="right") - 1
+    position = np.searchsorted(held, element, side="right")  # held nodes at or before the start
+    first, last = offsets[bar], offsets[bar + 1] - 1
+    left_held = (position > 0) & (held[np.maximum(position - 1, 0)] >= first)
+    right_held = (position < held.size) & (held[np.minimum(position, held.size - 1)] <= last)
+    run = position * len(scene.bars) + bar
+    starts = np.flatnonzero(np.r_[True, run[1:] != run[:-1]])
+    ends = np.r_[starts[1:], run.size]
+    size = np.diff(np.r_[starts, run.size])
+    before_bar = np.where(first > 0, outside[np.maximum(first - 1, 0)], 0.0)
+    after_bar = outside[last]
+    # c per run: weighted mean (held at both ends), the free end's cut residual otherwise
+    both = left_held[starts] & right_held[starts]
+    mean = np.add.reduceat(r * flexibility, starts) / np.add.reduceat(flexibility, starts)
+    c_run = np.where(both, mean, np.where(left_held[starts], after_bar[starts], before_bar[starts]))
+    c = np.repeat(c_run, size)
+    elongation = (c - r) * flexibility
+    total = np.cumsum(elongation)
+    base = np.repeat(total[starts] - elongation[starts], size)  # the sum before each run
+    from_left = total - base  # displacement of each element's end node, from the left end
+    tail_end = np.repeat(total[ends - 1], size)
+    from_right = tail_end - total + elongation  # of each element's start node, from the right
+    anchored_left = np.repeat(left_held[starts], size)
+    sway = _largest(np.where(anchored_left, from_left, from_right))
+    # force error at each held node: the jump of c between the elements on either side of it
+    # (past a bar's end, the cut residual there)
+    held_bar = np.searchsorted(offsets, held, side="right") - 1
+    start, end = offsets[held_bar], offsets[held_bar + 1] - 1
+    at = np.searchsorted(element, np.r_[held - 1, held].clip(0, element[-1]))
+    c_at = c[np.minimum(at, c.size - 1)]
+    c_left = np.where(held > start, c_at[: held.size],
+                      np.where(start > 0, outside[np.maximum(start - 1, 0)], 0.0))
+    c_right = np.where(held < end, c_at[held.size:], outside[end])
+    return _largest(c_left - c_right), sway
+
+
+def row_stiffness(scene: Scene, held: np.ndarray) -> np.ndarray:
+    """The stiffness (N/m) each contact row sees with the supports and ``held`` nodes fixed:
+    a wall, its node's (:func:`seen_stiffness`); a bar contact, its two nodes' in series (a
+    supported end is rigid)."""
+    rows, row_nodes, _, gaps = scene.contact_rows
+    node_stiffness = seen_stiffness(scene, held, row_nodes)
+    node_stiffness[np.isin(row_nodes, scene.support_nodes)] = np.inf
+    with np.errstate(divide="ignore"):
+        return 1.0 / np.bincount(rows, 1.0 / node_stiffness, minlength=gaps.size)
+
+
+def _both_sides(scene: Scene, lam: np.ndarray) -> float:
+    """The largest min(λ₊, λ₋) of a node with a wall on each side (N): a node cannot be
+    pushed from both sides at once, whatever the gaps; the common part is a pair of forces
+    that moves nothing and is wrong in both walls."""
+    n_walls = len(scene.walls)
+    if n_walls < 2:
+        return 0.0
+    _, nodes, signs, _ = scene.contact_rows
+    nodes, signs, force = nodes[:n_walls], signs[:n_walls], np.maximum(lam[:n_walls], 0.0)
+    plus = np.zeros(scene.n_nodes)
+    minus = np.zeros(scene.n_nodes)
+    plus[nodes[signs > 0]] = force[signs > 0]
+    minus[nodes[signs < 0]] = force[signs < 0]
+    return _largest(np.minimum(plus, minus))
 
 
 def section_residual(forces: np.ndarray, nodes: np.ndarray, external: np.ndarray) -> float:
@@ -213,10 +363,10 @@ def section_residual(forces: np.ndarray, nodes: np.ndarray, external: np.ndarray
     level[level_at >= 0] = totals[level_at[level_at >= 0]]
     top = np.maximum.reduceat(forces, starts) + level
     bottom = np.minimum.reduceat(forces, starts) + level
-    return max(_norm(top), _norm(bottom), balance)
+    return max(_largest(top), _largest(bottom), balance)
 
 
-def _norm(values: np.ndarray) -> float:
+def _largest(values: np.ndarray) -> float:
     """∞-norm; inf when any value is NaN or infinite (two reductions, no temporaries)."""
     values = np.asarray(values, dtype=float)
     if values.size == 0:
@@ -240,6 +390,11 @@ class Result:
         tension positive.
     stress_ratio : largest |stress| over the yield stress (None without a yield stress).
     residuals, verified, physical, message : the independent check (see :func:`check`).
+    force_error_bound : every contact force and reaction is within this of the exact answer
+        (N), as far as the check can tell from the residuals (module docstring).
+    displacement_error_bound : every displacement is within this of the exact answer (m).
+    force_scale, displacement_scale : F (N) and U (m), the scene's scales the residuals and
+        the guarantee are relative to.
     status, claimed_success : what the solver itself said, recorded and not trusted.
     time : wall time of the whole solve (s); timings splits it into build and solve.
     info : what the method reported beyond u and λ (e.g. a QP's scales and the solver's own
@@ -262,6 +417,10 @@ class Result:
     verified: bool
     physical: bool
     message: str
+    force_error_bound: float
+    displacement_error_bound: float
+    force_scale: float
+    displacement_scale: float
     status: str
     claimed_success: bool
     iterations: int
@@ -278,13 +437,17 @@ class Result:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (plain floats and lists)."""
         return {
-            "scene": self.scene.name, "method": self.method, "solver": self.solver,
+            "scene": self.scene.name, "units": self.scene.units, "method": self.method,
+            "solver": self.solver,
             "contact": self.contact, "options": _plain(self.options),
             "u": _plain(self.u), "contact_force": _plain(self.contact_force),
             "reactions": _plain(self.reactions), "penetration": _plain(self.penetration),
             "element_force": _plain(self.element_force), "stress": _plain(self.stress),
             "stress_ratio": self.stress_ratio, "residuals": _plain(self.residuals),
             "verified": self.verified, "physical": self.physical, "message": self.message,
+            "force_error_bound": _plain(self.force_error_bound),
+            "displacement_error_bound": _plain(self.displacement_error_bound),
+            "force_scale": self.force_scale, "displacement_scale": self.displacement_scale,
             "status": self.status, "claimed_success": self.claimed_success,
             "iterations": self.iterations, "time": self.time, "timings": _plain(self.timings),
             "warnings": list(self.warnings), "info": _plain(self.info),
@@ -336,7 +499,7 @@ def make_result(model: Model, solution: Solution, *, method: str, contact: str,
     stress = forces / scene.areas
     yield_stress = scene.yield_stress
     ratio = None if yield_stress is None else float(np.fmax.reduce(np.abs(stress) / yield_stress))
-    found = check(scene, u, lam, reactions, contact, tolerances, element_force=forces)
+    found = check(model, u, lam, reactions, contact, tolerances, element_force=forces)
     warnings: list[str] = []
     if ratio is not None and ratio > 1.0:
         e = int(np.nanargmax(np.abs(stress) / yield_stress))
@@ -344,10 +507,11 @@ def make_result(model: Model, solution: Solution, *, method: str, contact: str,
         if len(scene.bars) > 1:
             bar = int(np.searchsorted(np.cumsum([b.n_elements for b in scene.bars]), e, "right"))
             where = f"bar[{bar}] element {e - sum(b.n_elements for b in scene.bars[:bar])}"
+        megapascal = scene.unit.pascal / 1e6  # MPa is a unit of SI and of mm-N-MPa alike
         warnings.append(
-            f"stress beyond yield: {where} carries {stress[e] / 1e6:.1f} MPa, "
-            f"{ratio:.2f} x the yield stress {yield_stress[e] / 1e6:.0f} MPa (a linear-elastic "
-            "answer past yield)"
+            f"stress beyond yield: {where} carries {stress[e] * megapascal:.1f} MPa, "
+            f"{ratio:.2f} x the yield stress {yield_stress[e] * megapascal:.0f} MPa (a "
+            "linear-elastic answer past yield)"
         )
     if solution.claimed_success and not found.verified:
         warnings.append(f"{solution.solver} reported {solution.status!r} but the check failed")
@@ -356,7 +520,11 @@ def make_result(model: Model, solution: Solution, *, method: str, contact: str,
         options=dict(options), u=u, contact_force=lam, reactions=reactions,
         penetration=penetration(scene, u), element_force=forces, stress=stress,
         stress_ratio=ratio, residuals=found.residuals, verified=found.verified,
-        physical=found.physical, message=found.message, status=solution.status,
+        physical=found.physical, message=found.message,
+        force_error_bound=found.force_error_bound,
+        displacement_error_bound=found.displacement_error_bound,
+        force_scale=found.force_scale, displacement_scale=found.displacement_scale,
+        status=solution.status,
         claimed_success=solution.claimed_success, iterations=solution.iterations,
         time=sum(timings.values()), timings=dict(timings), warnings=tuple(warnings),
         info=dict(solution.info),

@@ -29,23 +29,89 @@ AREA_RULES = ("midpoint", "exact")
 WALL_SIDES = ("+", "-")
 
 
+@dataclass(frozen=True)
+class Units:
+    """A consistent unit system (force = stress × area, stiffness = force / length): the
+    names of its units, and the size of its length and stress units in SI (m, Pa). Every
+    number of a scene is in its units, and so is every answer: the algebra needs no
+    conversion."""
+
+    name: str
+    length: str
+    area: str
+    force: str
+    stress: str
+    metre: float  # one length unit, in m
+    pascal: float  # one stress unit, in Pa
+
+    @property
+    def stiffness(self) -> str:
+        """The unit of a stiffness (and of a distributed load): force per length."""
+        return f"{self.force}/{self.length}"
+
+
+UNIT_SYSTEMS = {
+    "SI": Units("SI", "m", "m²", "N", "Pa", 1.0, 1.0),
+    "mm-N-MPa": Units("mm-N-MPa", "mm", "mm²", "N", "MPa", 1e-3, 1e6),
+}
+
+
+# Every number of a scene is 0 or between 1/MAGNITUDE and MAGNITUDE in size: then every
+# product the model and the check form (stiffness E·A/L, displacement load/stiffness, energy,
+# a penalty 1e8 times a stiffness) stays far inside double precision, with no overflow.
+MAGNITUDE = 1e30
+MAX_ELEMENTS = 10_000_000  # every element costs ~1 kB across model, solve and check
+
+
+def _in_range(name: str, number: float, tiny: bool = False) -> float:
+    """``number`` if it is finite and 0 or within MAGNITUDE's range, else a SceneError.
+    ``tiny``: any small size will do (a gap, a load: no product of the model grows from it)."""
+    if not math.isfinite(number):
+        raise SceneError(f"{name} must be finite, got {number!r}")
+    if abs(number) > MAGNITUDE or (not tiny and number != 0.0 and abs(number) < 1 / MAGNITUDE):
+        raise SceneError(f"{name} = {number!r} is outside the range contactqp computes in "
+                         f"(0, or {1 / MAGNITUDE:.0e} to {MAGNITUDE:.0e} in size; choose other "
+                         "units)")
+    return number
+
+
+def _is_number(value: Any) -> bool:
+    return not isinstance(value, (bool, np.bool_)) and isinstance(
+        value, (int, float, np.integer, np.floating))
+
+
 def _positive_finite_array(name: str, values: Any) -> np.ndarray:
-    """Return ``values`` as a read-only float array, all finite and > 0, else a SceneError."""
+    """Return ``values`` as a read-only float array, all finite and > 0, else a SceneError
+    (strings and booleans are not numbers, even where numpy would convert them)."""
+    if isinstance(values, (str, bytes)):
+        raise SceneError(f"{name} must be numbers, got {values!r}")
     try:
-        array = np.array(values, dtype=float).reshape(-1)
+        raw = np.asarray(values)
     except (TypeError, ValueError):
         raise SceneError(f"{name} must be numbers, got {values!r}") from None
+    if raw.dtype.kind not in "iuf":
+        for i, value in enumerate(raw.reshape(-1)):
+            if not _is_number(value):
+                raise SceneError(f"{name}[{i}] must be a number, got {value!r}")
+    if raw.size > MAX_ELEMENTS:
+        raise SceneError(f"{name} has {raw.size} values; contactqp takes at most "
+                         f"{MAX_ELEMENTS} elements in a scene")
+    array = raw.astype(float).reshape(-1)
     bad = np.flatnonzero(~np.isfinite(array) | (array <= 0.0))
     if bad.size:
         i = int(bad[0])
         raise SceneError(f"{name}[{i}] must be a positive finite number, got {float(array[i])!r}")
+    for i in (int(array.argmin()), int(array.argmax())) if array.size else ():
+        _in_range(f"{name}[{i}]", float(array[i]))
     array.flags.writeable = False
     return array
 
 
-def _number(name: str, value: Any, *, minimum: float | None = None, strict: bool = False) -> float:
-    """Return ``value`` as a finite float (optionally >= or > ``minimum``), else a SceneError."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+def _number(name: str, value: Any, *, minimum: float | None = None, strict: bool = False,
+            tiny: bool = False) -> float:
+    """Return ``value`` as a finite float (optionally >= or > ``minimum``), else a SceneError;
+    ``tiny`` as for :func:`_in_range`."""
+    if not _is_number(value):
         raise SceneError(f"{name} must be a number, got {value!r}")
     number = float(value)
     if not math.isfinite(number):
@@ -53,7 +119,7 @@ def _number(name: str, value: Any, *, minimum: float | None = None, strict: bool
     if minimum is not None and (number <= minimum if strict else number < minimum):
         relation = ">" if strict else ">="
         raise SceneError(f"{name} must be {relation} {minimum:g}, got {number!r}")
-    return number
+    return _in_range(name, number, tiny)
 
 
 def _node(name: str, value: Any, n_nodes: int, owner: str = "the bar") -> int:
@@ -163,6 +229,9 @@ class Bar:
         total = _number("bar.length", length, minimum=0.0, strict=True)
         if isinstance(elements, bool) or not isinstance(elements, (int, np.integer)) or elements < 1:
             raise SceneError(f"bar.elements must be a whole number >= 1, got {elements!r}")
+        if elements > MAX_ELEMENTS:
+            raise SceneError(f"bar.elements = {elements}: contactqp takes at most {MAX_ELEMENTS} "
+                             "elements in a scene")
         d0 = _number("bar.section.diameter_start", diameter_start, minimum=0.0, strict=True)
         d1 = _number("bar.section.diameter_end", diameter_end, minimum=0.0, strict=True)
         edges = np.linspace(d0, d1, int(elements) + 1)
@@ -277,6 +346,7 @@ class Scene:
     name: str = "scene"
     distributed: tuple[DistributedLoad, ...] = ()
     contacts: tuple[BarContact, ...] = ()
+    units: str = "SI"
 
     def __post_init__(self) -> None:
         bars = (self.bar,) if isinstance(self.bar, Bar) else self.bar
@@ -307,10 +377,10 @@ class Scene:
             raise SceneError("support: every node is a support; nothing can move")
         for i, load in enumerate(loads):
             node(f"load[{i}]", load.bar, load.node)
-            _number(f"load[{i}].force", load.force)
+            _number(f"load[{i}].force", load.force, tiny=True)
         for i, q in enumerate(distributed):
             name = f"distributed_load[{i}]"
-            _number(f"{name}.intensity", q.intensity)
+            _number(f"{name}.intensity", q.intensity, tiny=True)
             n_elements = bars[_bar(f"{name}.bar", q.bar, len(bars))].n_elements
             stop = n_elements if q.stop is None else q.stop
             for key, value in (("start", q.start), ("stop", stop)):
@@ -322,7 +392,7 @@ class Scene:
         seen: dict[tuple[int, str], int] = {}
         for i, wall in enumerate(walls):
             at = node(f"wall[{i}]", wall.bar, wall.node)
-            _number(f"wall[{i}].gap", wall.gap)
+            _number(f"wall[{i}].gap", wall.gap, tiny=True)
             if wall.side not in WALL_SIDES:
                 raise SceneError(f"wall[{i}].side must be '+' or '-', got {wall.side!r}")
             if at in held:
@@ -339,7 +409,7 @@ class Scene:
         for i, c in enumerate(contacts):
             a = node(f"contact[{i}]", c.bar_a, c.node_a, suffix="_a")
             b = node(f"contact[{i}]", c.bar_b, c.node_b, suffix="_b")
-            _number(f"contact[{i}].gap", c.gap, minimum=0.0)
+            _number(f"contact[{i}].gap", c.gap, minimum=0.0, tiny=True)
             if a == b:
                 raise SceneError(f"contact[{i}]: node_a and node_b are the same node")
             if a in held and b in held:
@@ -353,6 +423,22 @@ class Scene:
         object.__setattr__(self, "walls", walls)
         object.__setattr__(self, "distributed", distributed)
         object.__setattr__(self, "contacts", contacts)
+        if not isinstance(self.name, str):
+            raise SceneError(f"name must be text, got {self.name!r}")
+        if self.units not in UNIT_SYSTEMS:
+            raise SceneError(f"units must be one of {', '.join(map(repr, UNIT_SYSTEMS))}, "
+                             f"got {self.units!r}")
+        if sum(b.n_elements for b in bars) > MAX_ELEMENTS:
+            raise SceneError(f"bar: {sum(b.n_elements for b in bars)} elements in all; contactqp "
+                             f"takes at most {MAX_ELEMENTS} in a scene")
+        conflict = impossible_constraints(self)
+        if conflict:
+            raise SceneError(conflict)
+
+    @property
+    def unit(self) -> Units:
+        """The scene's unit system (:data:`UNIT_SYSTEMS`)."""
+        return UNIT_SYSTEMS[self.units]
 
     @staticmethod
     def _node_checker(bars: tuple[Bar, ...]):
@@ -421,6 +507,11 @@ class Scene:
             return None
         return self._per_element([np.full(b.n_elements, np.nan if b.yield_stress is None
                                           else b.yield_stress) for b in self.bars])
+
+    @cached_property
+    def compliance(self) -> np.ndarray:
+        """Σ L/(EA) from its bar's node 0 to every node (m/N), bar after bar."""
+        return self._per_element([b.compliance_from_node_0 for b in self.bars])
 
     @cached_property
     def slot_stiffness(self) -> np.ndarray:
@@ -518,6 +609,94 @@ class Scene:
     def with_walls(self, walls: tuple[Wall, ...]) -> Scene:
         """The same scene with other walls."""
         return replace(self, walls=tuple(walls))
+
+
+def impossible_constraints(scene: Scene) -> str:
+    """Why no displacement satisfies the scene's supports, walls and bar contacts together,
+    or "" when one does.
+
+    They are difference constraints: a support is u = 0, a "+" wall u ≤ g, a "−" wall
+    −u ≤ g, a bar contact u_a − u_b ≤ g. Such a system has a solution exactly when its
+    constraint graph (an edge w → v of weight c for each x_v − x_w ≤ c, the supports merged
+    into one zero node) has no cycle of negative total weight (Bellman–Ford); the cycle names
+    the constraints that conflict. Only the nodes of bar contacts can lie on a longer cycle:
+    any other walled node is checked on its own (its two walls' gaps must not sum below 0).
+    """
+    unit = scene.unit.length
+    offsets = scene.node_offsets
+    supports = set(scene.support_nodes.tolist())
+
+    def where(node: int) -> str:
+        bar = int(np.searchsorted(offsets, node, side="right") - 1)
+        local = node - int(offsets[bar])
+        return f"node {local}" if len(scene.bars) == 1 else f"bar {bar} node {local}"
+
+    # edges: (from, to, weight, what it says); vertex -1 is zero displacement (the supports)
+    def vertex(node: int) -> int:
+        return -1 if node in supports else node
+
+    edges = []
+    for i, wall in enumerate(scene.walls):
+        node = scene.global_node(wall.bar, wall.node)
+        if wall.side == "+":
+            edges.append((-1, node, wall.gap, f"wall[{i}] (u ≤ {wall.gap:.6g} {unit} at {where(node)})"))
+        else:
+            edges.append((node, -1, wall.gap, f"wall[{i}] (u ≥ {-wall.gap:.6g} {unit} at {where(node)})"))
+    for i, c in enumerate(scene.contacts):
+        a, b = scene.global_node(c.bar_a, c.node_a), scene.global_node(c.bar_b, c.node_b)
+        edges.append((vertex(b), vertex(a), c.gap,
+                      f"contact[{i}] (u at {where(a)} − u at {where(b)} ≤ {c.gap:.6g} {unit})"))
+    contact_nodes = {vertex(scene.global_node(c.bar_a, c.node_a)) for c in scene.contacts} | {
+        vertex(scene.global_node(c.bar_b, c.node_b)) for c in scene.contacts}
+    # a node on its own: its "+" and "−" walls
+    sides: dict[int, dict[int, tuple[float, str]]] = {}
+    for start, end, weight, text in edges[: len(scene.walls)]:
+        node = end if start == -1 else start
+        sides.setdefault(node, {})[1 if start == -1 else -1] = (weight, text)
+    for node, pair in sides.items():
+        if len(pair) == 2 and pair[1][0] + pair[-1][0] < 0.0 and node not in contact_nodes:
+            return (f"{pair[1][1]} and {pair[-1][1]} leave {where(node)} no position "
+                    "(the gaps of its two walls sum below 0)")
+    if not scene.contacts:
+        return ""
+    graph = [(a, b, w, t) for a, b, w, t in edges
+             if (a == -1 or a in contact_nodes) and (b == -1 or b in contact_nodes)]
+    cycle = negative_cycle(graph)
+    if not cycle:
+        return ""
+    total = sum(w for _, _, w, _ in cycle)
+    return (f"{', '.join(t for *_, t in cycle)} leave no position for the nodes they hold "
+            f"(together they need 0 ≤ {total:.6g} {unit})")
+
+
+def negative_cycle(edges: list[tuple[int, int, float, str]]) -> list[tuple[int, int, float, str]]:
+    """The edges of a cycle of negative total weight in a directed graph given as
+    (from, to, weight, label) edges, or [] when there is none (Bellman–Ford from a virtual
+    source joined to every vertex by weight 0)."""
+    vertices = sorted({v for a, b, *_ in edges for v in (a, b)})
+    distance = dict.fromkeys(vertices, 0.0)
+    before: dict[int, tuple[int, int, float, str]] = {}
+    changed = None
+    for _ in range(len(vertices)):
+        changed = None
+        for edge in edges:
+            a, b, weight, _ = edge
+            if distance[a] + weight < distance[b]:
+                distance[b] = distance[a] + weight
+                before[b] = edge
+                changed = b
+        if changed is None:
+            return []
+    node = changed
+    for _ in range(len(vertices)):  # walk back into the cycle
+        node = before[node][0]
+    cycle, at = [], node
+    while True:
+        edge = before[at]
+        cycle.append(edge)
+        at = edge[0]
+        if at == node:
+            return cycle[::-1]
 
 
 def wall_at_every_node(scene: Scene, gap: Any, side: WallSide = "+", bar: int = 0) -> Scene:
@@ -641,13 +820,38 @@ def minimal(scene: Scene) -> Scene:
                           for q in scene.distributed),
         contacts=tuple(replace(c, node_a=int(numbers[c.bar_a][c.node_a]),
                                node_b=int(numbers[c.bar_b][c.node_b])) for c in scene.contacts),
+        units=scene.units,
+    )
+
+
+def convert_units(scene: Scene, units: str) -> Scene:
+    """The same physical scene in another unit system (:data:`UNIT_SYSTEMS`): lengths, areas,
+    moduli, yield stresses, gaps and distributed loads converted; point loads stay in N."""
+    if units not in UNIT_SYSTEMS:
+        raise SceneError(f"units must be one of {', '.join(map(repr, UNIT_SYSTEMS))}, "
+                         f"got {units!r}")
+    old, new = scene.unit, UNIT_SYSTEMS[units]
+    length, stress = old.metre / new.metre, old.pascal / new.pascal
+
+    def bar(b: Bar) -> Bar:
+        yield_stress = None if b.yield_stress is None else b.yield_stress * stress
+        return Bar(b.lengths * length, b.areas * length**2, b.youngs_modulus * stress,
+                   yield_stress)
+
+    bars = tuple(bar(b) for b in scene.bars)
+    return replace(
+        scene, bar=bars[0] if len(bars) == 1 else bars, units=units,
+        walls=tuple(replace(w, gap=w.gap * length) for w in scene.walls),
+        contacts=tuple(replace(c, gap=c.gap * length) for c in scene.contacts),
+        distributed=tuple(replace(q, intensity=q.intensity / length) for q in scene.distributed),
     )
 
 
 # ---------------------------------------------------------------------------------------------
 # TOML
 
-_TOP_KEYS = {"name", "material", "bar", "support", "load", "wall", "distributed_load", "contact",
+_TOP_KEYS = {"name", "units", "material", "bar", "support", "load", "wall", "distributed_load",
+             "contact",
              "obstacle"}
 _MATERIAL_KEYS = {"youngs_modulus", "yield_stress"}
 _BAR_KEYS = {"length", "lengths", "elements", "section", "areas", "material"}
@@ -748,13 +952,14 @@ def scene_from_dict(data: dict, name: str = "scene") -> Scene:
                                   {"bar_a", "node_a", "bar_b", "node_b", "gap"})
     )
     scene = Scene(bars, supports, loads, walls, name=str(data.get("name", name)),
+                  units=data.get("units", "SI"),
                   distributed=distributed, contacts=contacts)
     for i, o in enumerate(_array_of_tables(data, "obstacle", {"gap", "side", "bar"}, {"gap"})):
         gap = o["gap"]
         if isinstance(gap, list):
-            gap = [_number(f"obstacle[{i}].gap[{j}]", g) for j, g in enumerate(gap)]
+            gap = [_number(f"obstacle[{i}].gap[{j}]", g, tiny=True) for j, g in enumerate(gap)]
         else:
-            gap = _number(f"obstacle[{i}].gap", gap)
+            gap = _number(f"obstacle[{i}].gap", gap, tiny=True)
         scene = wall_at_every_node(scene, gap, o.get("side", "+"), o.get("bar", 0))
     return scene
 
@@ -778,7 +983,8 @@ def load_scene(path: str | Path) -> Scene:
 def scene_to_toml(scene: Scene) -> str:
     """The scene as TOML text that :func:`load_scene` reads back (explicit areas and lengths;
     an obstacle as its walls)."""
-    lines = [f"name = {json.dumps(scene.name)}"]  # JSON strings are TOML
+    lines = [f"name = {json.dumps(scene.name)}",  # JSON strings are TOML
+             f"units = {json.dumps(scene.units)}"]
     several = len(scene.bars) > 1
     for i, bar in enumerate(scene.bars):
         moduli = np.unique(bar.youngs_modulus)
@@ -806,7 +1012,8 @@ def scene_to_toml(scene: Scene) -> str:
 
 
 __all__ = [
-    "AREA_RULES", "Bar", "BarContact", "DistributedLoad", "Load", "Scene", "Support", "Wall",
-    "circle_areas", "load_scene", "minimal", "needed_nodes", "scene_from_dict", "scene_to_toml",
+    "AREA_RULES", "UNIT_SYSTEMS", "Bar", "BarContact", "DistributedLoad", "Load", "Scene",
+    "Support", "Units", "Wall", "circle_areas", "convert_units", "impossible_constraints",
+    "load_scene", "minimal", "needed_nodes", "scene_from_dict", "scene_to_toml",
     "seed_scene", "wall_at_every_node",
 ]

@@ -8,7 +8,7 @@ import numpy as np
 
 from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, solve
-from contactqp.methods.penalty import DEFAULT_PENALTY
+from contactqp.methods.penalty import TEXTBOOK_PENALTY
 from contactqp.methods.qp import available_qp_solvers
 from contactqp.result import Result
 from contactqp.scene import (
@@ -24,6 +24,12 @@ from contactqp.scene import (
 SWEEP_PENALTIES = (1.0,) + tuple(10.0 ** k for k in range(5, 21))  # N/m: 1, 1e5, 1e6 … 1e20
 
 
+def sweep_penalties(scene: Scene) -> tuple[float, ...]:
+    """:data:`SWEEP_PENALTIES` (N/m) in the scene's units (force per length): the same
+    physical sweep in every unit system."""
+    return tuple(eps * scene.unit.metre for eps in SWEEP_PENALTIES)
+
+
 @dataclass(frozen=True)
 class Run:
     """One row of a comparison: a Result, or the error that stopped the method."""
@@ -34,9 +40,13 @@ class Run:
     error: str = ""
 
 
-def method_runs() -> list[tuple[str, dict]]:
-    """(method, options) of every run in a comparison, one per installed solver."""
-    runs: list[tuple[str, dict]] = [("lagrange", {}), ("penalty", {}), ("augmented", {})]
+def method_runs(scene: Scene | None = None) -> list[tuple[str, dict]]:
+    """(method, options) of every run in a comparison, one per installed solver; the penalty
+    at its default ε and at the textbook's 1e14 N/m (in the scene's units)."""
+    metre = 1.0 if scene is None else scene.unit.metre
+    runs: list[tuple[str, dict]] = [("lagrange", {}), ("penalty", {}),
+                                    ("penalty", {"penalty": TEXTBOOK_PENALTY * metre}),
+                                    ("augmented", {})]
     for info in available_qp_solvers():
         if info.available:
             runs.append(("qp", {"backend": info.backend, "solver": info.solver}))
@@ -44,9 +54,9 @@ def method_runs() -> list[tuple[str, dict]]:
 
 
 def run_label(method: str, options: dict) -> str:
-    """e.g. 'lagrange', 'penalty ε=1e+14', 'qp/osqp/OSQP'."""
-    if method == "penalty":
-        return f"penalty ε={options.get('penalty', DEFAULT_PENALTY):.0e}"
+    """e.g. 'lagrange', 'penalty', 'penalty ε=1e+14', 'qp/osqp/OSQP'."""
+    if method == "penalty" and "penalty" in options:
+        return f"penalty ε={options['penalty']:.0e}"
     return "/".join([method, *(str(v) for v in options.values() if v)])
 
 
@@ -55,7 +65,7 @@ def compare(scene: Scene | None = None, contacts: tuple[str, ...] = CONTACT_KIND
     scene = seed_scene() if scene is None else scene
     rows = []
     for contact in contacts:
-        for method, options in method_runs():
+        for method, options in method_runs(scene):
             label = run_label(method, options)
             try:
                 rows.append(Run(label, contact, solve(scene, method, contact, **options)))
@@ -85,13 +95,20 @@ class PenaltySweep:
     augmented_iterations: np.ndarray
 
     def summary(self) -> str:
+        if not np.any(np.isfinite(self.force_error)):
+            return "no penalty solve succeeded"
+        if not np.any(self.reference.contact_force):
+            return ("no contact carries a force here (every ε gives the free answer): nothing "
+                    "to converge")
         best = self.penalties[self.best]
-        text = (f"converges up to ε = {best:.0e} N/m (force error {self.force_error[self.best]:.1e})")
+        unit = self.reference.scene.unit.stiffness
+        text = (f"converges up to ε = {best:.0e} {unit} (force error "
+                f"{self.force_error[self.best]:.1e})")
         after = self.force_error[self.best + 1:]
         if after.size:
             worst = np.nanmax(after) if np.any(np.isfinite(after)) else np.nan
             text += (f"; beyond it round-off takes over (error grows to {worst:.1e} by "
-                     f"ε = {self.penalties[-1]:.0e})")
+                     f"ε = {self.penalties[-1]:.0e} {unit})")
         else:
             text += "; still converging at the largest ε"
         return text
@@ -116,11 +133,13 @@ def _sweep_runs(scene: Scene, method: str, penalties: tuple[float, ...], contact
     return tuple(runs), np.array(errors)
 
 
-def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] = SWEEP_PENALTIES,
+def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | None = None,
                   contact: str = "inequality") -> PenaltySweep:
     """Penetration and contact force of the penalty method (and of the augmented Lagrangian
-    method with the same ε) for each ε in ``penalties``."""
+    method with the same ε) for each ε in ``penalties`` (force per length in the scene's
+    units; default :func:`sweep_penalties`, 1 and 1e5 … 1e20 N/m)."""
     scene = seed_scene() if scene is None else scene
+    penalties = sweep_penalties(scene) if penalties is None else tuple(penalties)
     reference = solve(scene, "lagrange", contact)
     runs, errors = _sweep_runs(scene, "penalty", penalties, contact, reference)
     augmented, augmented_errors = _sweep_runs(scene, "augmented", penalties, contact, reference)

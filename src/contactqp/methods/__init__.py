@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import inspect
+import os
 import time
 from collections.abc import Callable
 from dataclasses import replace
@@ -22,7 +23,7 @@ from contactqp.methods.penalty import solve_penalty
 from contactqp.methods.qp import solve_qp
 from contactqp.model import CONTACT_KINDS, build_model, condense, contact_kind
 from contactqp.result import Result, Solution, make_result
-from contactqp.scene import Scene, seed_scene
+from contactqp.scene import Scene, load_scene, seed_scene
 
 FORMULATIONS = ("full", "condensed", "strain")
 
@@ -49,7 +50,7 @@ def takes_strain(method: str) -> bool:
 
 def validate(method: str, contact: str, options: dict[str, Any]) -> Callable[..., Solution]:
     """The function of ``method``, after checking it, ``contact`` and ``options`` (OptionError)."""
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise OptionError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     contact_kind(contact)
     allowed = method_options(method)
@@ -62,29 +63,81 @@ def validate(method: str, contact: str, options: dict[str, Any]) -> Callable[...
 
 
 def check_equality_is_possible(scene: Scene) -> None:
-    """Equality contact ties a node to every wall it has: walls on both sides of one node
-    would hold it at +gap and -gap at once."""
-    sides: dict[int, int] = {}
-    for i, wall in enumerate(scene.walls):
-        node = scene.global_node(wall.bar, wall.node)
-        if node in sides:
+    """Equality contact ties every contact row: a support or one wall fixes a node, a bar
+    contact ties two nodes. Two ties between the same nodes (walls on both sides of one node,
+    two walls on nodes a bar contact ties, a loop of bar contacts) over-determine them: the
+    saddle-point system is singular. An OptionError names the ties that close the loop."""
+    parent: dict[int, int] = {}
+
+    def root(node: int) -> int:
+        while parent.get(node, node) != node:
+            node = parent[node]
+        return node
+
+    ties: list[tuple[int, int, str]] = []  # accepted ties: (node, node, name); -1 is "held"
+    supports = set(scene.support_nodes.tolist())
+    rows = [(-1, scene.global_node(w.bar, w.node), f"wall[{i}] (node {w.node})")
+            for i, w in enumerate(scene.walls)]
+    rows += [(scene.global_node(c.bar_a, c.node_a), scene.global_node(c.bar_b, c.node_b),
+              f"contact[{i}]") for i, c in enumerate(scene.contacts)]
+    for a, b, name in rows:
+        a, b = (-1 if a in supports else a), (-1 if b in supports else b)
+        if root(a) == root(b):
+            loop = _tie_path(ties, a, b)
             raise OptionError(
-                f"contact='equality' cannot hold node {wall.node} at wall[{sides[node]}] and "
-                f"wall[{i}] at once; use contact='inequality'"
+                f"contact='equality' cannot hold {name} together with {', '.join(loop)}: they "
+                "fix the same nodes twice; use contact='inequality'"
             )
-        sides[node] = i
+        parent[root(a)] = root(b)
+        ties.append((a, b, name))
 
 
-def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "inequality",
+def _tie_path(ties: list[tuple[int, int, str]], start: int, goal: int) -> list[str]:
+    """The names of the ties on the path from ``start`` to ``goal`` (breadth first)."""
+    neighbours: dict[int, list[tuple[int, str]]] = {}
+    for a, b, name in ties:
+        neighbours.setdefault(a, []).append((b, name))
+        neighbours.setdefault(b, []).append((a, name))
+    came: dict[int, tuple[int, str] | None] = {start: None}
+    queue = [start]
+    for node in queue:
+        for following, name in neighbours.get(node, []):
+            if following not in came:
+                came[following] = (node, name)
+                queue.append(following)
+    path, node = [], goal
+    while came.get(node) is not None:
+        node, name = came[node]
+        path.append(name)
+    return path[::-1] or ["a support"]
+
+
+def as_scene(scene: Scene | str | os.PathLike | None) -> Scene:
+    """The scene to solve: the default scene for None, a scene file read for a path."""
+    if scene is None:
+        return seed_scene()
+    if isinstance(scene, (str, os.PathLike)):
+        return load_scene(scene)
+    if not isinstance(scene, Scene):
+        raise OptionError(f"scene must be a contactqp.Scene, a scene file's path or None, "
+                          f"got {type(scene).__name__}")
+    return scene
+
+
+def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrange", contact: str = "inequality",
           formulation: str = "full", **options: Any) -> Result:
     """Solve a scene (the default scene when None) by ``method`` with ``contact``
     "inequality" (unilateral, the default) or "equality" (the textbook form).
 
-    Methods and their options: "lagrange" (max_iterations), "penalty" (penalty ε in N/m,
-    default 1e14; max_iterations), "augmented" (penalty, default 100 x max diag K; tolerance;
-    max_iterations), "qp" (backend "clarabel" (default), "osqp", "cvxpy" or "qpsolvers";
-    solver, None for the backend's default; accuracy "default" or "high"; scale, default True:
-    see :mod:`contactqp.methods.qp`).
+    ``scene``: a Scene, the path of a scene file (read by :func:`contactqp.load_scene`), or
+    None for the default scene.
+
+    Methods and their options: "lagrange" (max_iterations), "penalty" (penalty ε, force per
+    length in the scene's units, default 1e8 × the stiffness the walls see; max_iterations),
+    "augmented" (penalty, default 100 × the stiffness the walls see; tolerance, default
+    1e-10; max_iterations), "qp" (backend "clarabel" (default), "osqp", "cvxpy" or
+    "qpsolvers"; solver, None for the backend's default; accuracy "default" or "high"; scale,
+    default True; verbose, default False: see :mod:`contactqp.methods.qp`).
 
     ``formulation``: "full" (every free node an unknown), "condensed" (K factored once, the
     method sees only the nodes that carry walls, every displacement recovered from the same
@@ -93,7 +146,7 @@ def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "
     whose multipliers are the element forces; see :func:`contactqp.model.elongation_rows`).
     Returns a checked :class:`Result`.
     """
-    scene = seed_scene() if scene is None else scene
+    scene = as_scene(scene)
     function = validate(method, contact, options)
     if formulation not in FORMULATIONS:
         raise OptionError(f"formulation must be one of {', '.join(FORMULATIONS)}; "
@@ -127,5 +180,5 @@ def solve(scene: Scene | None = None, method: str = "lagrange", contact: str = "
                        timings={"build": built - start, "solve": solved - built})
 
 
-__all__ = ["CONTACT_KINDS", "FORMULATIONS", "METHODS", "check_equality_is_possible",
+__all__ = ["CONTACT_KINDS", "FORMULATIONS", "METHODS", "as_scene", "check_equality_is_possible",
            "method_options", "solve", "takes_strain"]

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp import linalg
-from contactqp.methods._active_set import active_set_loop
+from contactqp.methods._active_set import active_set_loop, iteration_limit, positive_number
 from contactqp.methods.penalty import penalty_value
 from contactqp.model import Model, wall_stiffness
 from contactqp.result import Solution
@@ -45,6 +45,8 @@ def solve_augmented(model: Model, contact: str, *, penalty: float | None = None,
     no longer shrinks the change (round-off: status says so). If that takes more than
     ``max_iterations`` updates the last iterate is returned with ``claimed_success`` False."""
     eps = default_penalty(model) if penalty is None else penalty_value(penalty)
+    tolerance = positive_number(tolerance, "tolerance", "relative change of λ")
+    max_iterations = iteration_limit(max_iterations)
     K, P, C, g = model.K, model.P, model.C, model.g
     unilateral = contact == "inequality"
     lam = np.zeros(model.n_contacts)

@@ -6,34 +6,39 @@ set is stable). The answer always leaves a penetration of about λ/ε.
 
 from __future__ import annotations
 
-import math
+from typing import Any
 
 import numpy as np
 
 from contactqp import linalg
-from contactqp.errors import OptionError
-from contactqp.methods._active_set import active_set_loop, displacement_tolerance
-from contactqp.model import Model
+from contactqp.methods._active_set import active_set_loop, displacement_tolerance, positive_number
+from contactqp.model import Model, wall_stiffness
 from contactqp.result import Solution
 
-DEFAULT_PENALTY = 1e14  # N/m, as in the textbook example
+TEXTBOOK_PENALTY = 1e14  # N/m, the textbook example's ε (in SI units: penalty=1e14)
+PENALTY_PER_STIFFNESS = 1e8  # default ε: this many times the stiffness the walls see
 
 
-def penalty_value(penalty: float) -> float:
+def penalty_value(penalty: Any) -> float:
     """``penalty`` as a positive finite float, else an OptionError naming it."""
-    try:
-        value = float(penalty)
-    except (TypeError, ValueError):
-        raise OptionError(f"penalty must be a number (N/m), got {penalty!r}") from None
-    if not (math.isfinite(value) and value > 0.0):
-        raise OptionError(f"penalty must be a positive finite number (N/m), got {penalty!r}")
-    return value
+    return positive_number(penalty, "penalty", "force per length, e.g. N/m")
 
 
-def solve_penalty(model: Model, contact: str, *, penalty: float = DEFAULT_PENALTY,
+def default_penalty(model: Model) -> float:
+    """ε = 1e8 × the stiffness the walls see (:func:`contactqp.model.wall_stiffness`), in the
+    scene's units, so that it means the same in every unit system. The penalty's force error
+    is about s/ε of the force (s the stiffness a wall sees), and round-off in K + ε CᵀC grows
+    as ε/s × 1e-16: 1e8 = 1/√(machine ε) balances the two near 1e-8 (on the default scene:
+    ε = 1.3e16 N/m, 1e-8 off; the textbook ε = 1e14 N/m leaves 1.3e-6)."""
+    seen = wall_stiffness(model)
+    return PENALTY_PER_STIFFNESS * (1.0 if seen is None else seen)
+
+
+def solve_penalty(model: Model, contact: str, *, penalty: float | None = None,
                   max_iterations: int | None = None) -> Solution:
-    """Penalty ``penalty`` (ε, N/m); ``contact`` "equality" or "inequality"."""
-    eps = penalty_value(penalty)
+    """Penalty ``penalty`` (ε, force per length in the scene's units; default
+    :func:`default_penalty`); ``contact`` "equality" or "inequality"."""
+    eps = default_penalty(model) if penalty is None else penalty_value(penalty)
     K, P, C, g = model.K, model.P, model.C, model.g
 
     def step(active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -44,7 +49,7 @@ def solve_penalty(model: Model, contact: str, *, penalty: float = DEFAULT_PENALT
 
     if contact == "equality":
         u, lam = step(np.ones(model.n_contacts, dtype=bool))
-        return Solution(u, lam, solver="penalty")
+        return Solution(u, lam, solver="penalty", info={"penalty": eps})
 
     def update(active: np.ndarray, u: np.ndarray, lam: np.ndarray) -> np.ndarray:
         # a wall is added past +tol and released below −tol: without the band, a load that
@@ -56,4 +61,4 @@ def solve_penalty(model: Model, contact: str, *, penalty: float = DEFAULT_PENALT
 
     u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="penalty",
                                          max_iterations=max_iterations)
-    return Solution(u, lam, solver="penalty", iterations=iterations)
+    return Solution(u, lam, solver="penalty", iterations=iterations, info={"penalty": eps})

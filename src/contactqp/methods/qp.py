@@ -41,7 +41,9 @@ claims nothing, which the Result's check flags.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import io
 import math
 import time
 from dataclasses import dataclass
@@ -150,43 +152,43 @@ class QPProblem:
 
 
 def scales(model: Model) -> tuple[float, float]:
-    """(U in m, F in N): the displacement and force scales of a model (module docstring).
+    """(U, F): the displacement and force scales of a model's QP (module docstring), in the
+    scene's units.
 
     k = 1 / ‖K⁻¹e‖∞, e = 1 at every loaded or walled free node: the stiffness of the bar as
-    the loads and walls see it, from the scene's structure alone. U = max(‖K⁻¹P‖∞, largest
-    −gap): the free (wall-less) displacement, or how far a wall starts past its node; F = k·U.
+    the loads and walls see it, from the scene's structure alone. U is the model's
+    displacement scale (:attr:`contactqp.model.Model.displacement_scale`: ‖K⁻¹P‖∞, the free
+    displacement, or the deepest press fit) rounded to a power of two of metres; F = k·U.
     Contact forces are then O(F): a wall with an open gap can only take what the loads bring.
-    U is rounded to a power of two. Both right-hand sides go through one banded Cholesky
-    factorisation. Without loads or walls
-    k falls back to the largest diagonal of K; without loads or penetrations (u = 0 then) U is
-    the largest gap, or 1 m.
+    Open gaps are not a scale: a far wall's gap would shrink the loads below the solver's
+    tolerance (measured: Clarabel "Solved" with 81 N on a 1 N load pulling away from a
+    zero-gap wall, U set by a second wall 0.19 mm away). Without loads or walls k falls back
+    to the largest diagonal of K.
     """
     e = np.zeros(model.n_free)
     e[np.flatnonzero(model.P)] = 1.0
     e[model.C.indices] = 1.0
-    solved = model.solve_K(np.column_stack((e, model.P)))
     if e.any():
-        k = 1.0 / float(np.abs(solved[:, 0]).max())
+        k = 1.0 / float(np.abs(model.solve_K_and_loads(e)).max())
     else:
         k = float(model.K.diagonal().max())
-    # what moves the bar: the loads, and walls that start past their node (gap < 0). Open gaps
-    # are not a scale: a far wall's gap would shrink the loads to below the solver's tolerance
-    # (measured: Clarabel "Solved" with 81 N on a 1 N load pulling away from a zero-gap wall,
-    # U set by a second wall 0.19 mm away)
-    U = max(float(np.abs(solved[:, 1]).max(initial=0.0)), float(np.max(-model.g, initial=0.0)))
-    if not U > 0.0:  # nothing loads the bar: u = 0, λ = 0; any U will do, the gaps if any
-        U = float(np.abs(model.g).max(initial=0.0)) or 1.0
-    # U rounded to a power of two: then F / U is exactly k, so the scaled K does not change
-    # with the loads (a cvxpy re-solve along a load path finds its cached problem), and
-    # dividing by U rounds nothing
-    U = math.ldexp(1.0, round(math.log2(U))) if math.isfinite(U) else U
+    # U rounded to a power of two (of metres, so that a solver sees the same numbers whatever
+    # the scene's units): then the scaled K does not change with the loads until U crosses a
+    # power of two (a cvxpy re-solve along a load path finds its cached problem)
+    U, metre = model.displacement_scale, model.scene.unit.metre
+    U = math.ldexp(1.0, round(math.log2(U * metre))) / metre if math.isfinite(U) else U
     return U, k * U
 
 
+def _flag(name: str, value: Any) -> bool:
+    """A True/False option, else an OptionError naming it."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise OptionError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
 def _scale_option(scale: Any) -> bool:
-    if not isinstance(scale, (bool, np.bool_)):
-        raise OptionError(f"scale must be True or False, got {scale!r}")
-    return bool(scale)
+    return _flag("scale", scale)
 
 
 def qp_from_model(model: Model, contact: str = "inequality", scale: bool = True,
@@ -509,11 +511,26 @@ _KNOWN_WITHOUT_MODULE = {
 # The method
 
 
-def guarded(solve: Any, qp: QPProblem, *args: Any) -> QPOutcome:
+class _Sink(io.TextIOBase):
+    """A text stream that keeps nothing."""
+
+    def write(self, text: str) -> int:
+        return len(text)
+
+
+_SINK = _Sink()
+
+
+def guarded(solve: Any, qp: QPProblem, *args: Any, verbose: bool = False) -> QPOutcome:
     """Call a backend's solve; anything the solver raises becomes a failed outcome (the Result
-    check then flags it). The library's own errors (user mistakes) pass through."""
+    check then flags it). The library's own errors (user mistakes) pass through. Whatever the
+    solver prints from Python goes nowhere unless ``verbose`` (OSQP prints "Polishing not
+    needed" with verbose=False); the backends also pass verbose to the solvers' own C code."""
     try:
-        return solve(qp, *args)
+        if verbose:
+            return solve(qp, *args)
+        with contextlib.redirect_stdout(_SINK), contextlib.redirect_stderr(_SINK):
+            return solve(qp, *args)
     except (KeyboardInterrupt, SystemExit, ContactqpError):
         raise
     except BaseException as error:  # noqa: BLE001 - Rust solvers panic with a BaseException
@@ -522,12 +539,15 @@ def guarded(solve: Any, qp: QPProblem, *args: Any) -> QPOutcome:
 
 def solve_qp(model: Model, contact: str, *, backend: str = DEFAULT_BACKEND,
              solver: str | None = None, accuracy: str = "default",
-             scale: bool = DEFAULT_SCALE, formulation: str = "full") -> Solution:
+             scale: bool = DEFAULT_SCALE, formulation: str = "full",
+             verbose: bool = False) -> Solution:
     """Solve the contact problem as a QP with ``backend`` ("clarabel", "osqp", "cvxpy",
     "qpsolvers") and ``solver`` (a name the backend knows; None: its default), at
     ``accuracy`` "default" or "high" (:func:`accuracy_settings`), scaled or in SI (``scale``),
     as the QP in displacements (``formulation="full"``) or with element elongations
-    ("strain"; the tie rows' multipliers, the element forces in N, go to ``info``)."""
+    ("strain"; the tie rows' multipliers, the element forces in N, go to ``info``).
+    ``verbose``: let the solver print its progress (by default nothing is printed)."""
+    verbose = _flag("verbose", verbose)
     module, name = resolve_solver(backend, solver)
     settings = accuracy_settings(name, accuracy, scaled=_scale_option(scale), backend=backend)
     start = time.perf_counter()
@@ -541,7 +561,7 @@ def solve_qp(model: Model, contact: str, *, backend: str = DEFAULT_BACKEND,
             f"(limit {DENSE_LIMIT})",
         )
     else:
-        outcome = guarded(module.solve, qp, name, settings)
+        outcome = guarded(module.solve, qp, name, settings, verbose, verbose=verbose)
     sign = DUAL_SIGNS[backend][contact]
     dual = sign * np.asarray(outcome.dual, dtype=float)  # of qp.rows(): the ties, then the walls
     u_free, contact_force = qp.to_si(outcome.x, dual[qp.n_ties:])

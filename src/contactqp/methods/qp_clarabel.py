@@ -29,11 +29,11 @@ def canonical(solver: str) -> str:
     return solver.lower()
 
 
-def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
+def solve(qp: QPProblem, solver: str, settings: dict[str, Any], verbose: bool = False) -> QPOutcome:
     """Solve ``qp`` with Clarabel; ``settings`` are DefaultSettings attributes."""
     start = time.perf_counter()
     options = clarabel.DefaultSettings()
-    options.verbose = False
+    options.verbose = verbose
     for key, value in settings.items():
         setattr(options, key, value)
     m, ties = qp.g.size, qp.n_ties

@@ -167,7 +167,7 @@ def clear_cache() -> None:
     _CACHE.clear()
 
 
-def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
+def solve(qp: QPProblem, solver: str, settings: dict[str, Any], verbose: bool = False) -> QPOutcome:
     """Solve ``qp`` through cvxpy with ``solver``; ``settings`` go to the solver."""
     start = time.perf_counter()
     cached, hit = structure(qp)
@@ -179,7 +179,7 @@ def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
     with warnings.catch_warnings():
         # the status says so ("optimal_inaccurate", which claims nothing), and the check decides
         warnings.filterwarnings("ignore", message="Solution may be inaccurate")
-        cached.problem.solve(solver=solver, warm_start=False, verbose=False, **settings)
+        cached.problem.solve(solver=solver, warm_start=False, verbose=verbose, **settings)
     solved = time.perf_counter()
     stats = cached.problem.solver_stats
     status = str(cached.problem.status)

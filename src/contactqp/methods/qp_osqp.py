@@ -33,7 +33,7 @@ def canonical(solver: str) -> str:
     return solver.lower()
 
 
-def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
+def solve(qp: QPProblem, solver: str, settings: dict[str, Any], verbose: bool = False) -> QPOutcome:
     """Solve ``qp`` with OSQP; ``settings`` are OSQP settings (eps_abs, polishing, ...)."""
     start = time.perf_counter()
     upper = qp.rows_rhs()
@@ -42,7 +42,7 @@ def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
         lower[qp.n_ties:] = -np.inf
     engine = osqp.OSQP()
     engine.setup(sp.csc_matrix(qp.K_upper), qp.q, sp.csc_matrix(qp.rows()), lower,
-                 upper, verbose=False, **settings)
+                 upper, verbose=verbose, **settings)
     setup = time.perf_counter()
     found = engine.solve(raise_error=False)
     solved = time.perf_counter()

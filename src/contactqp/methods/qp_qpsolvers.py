@@ -51,7 +51,7 @@ def _status(found: qpsolvers.Solution) -> str:
     return text
 
 
-def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
+def solve(qp: QPProblem, solver: str, settings: dict[str, Any], verbose: bool = False) -> QPOutcome:
     """Solve ``qp`` with qpsolvers' ``solver``; ``settings`` go to that solver as keywords."""
     start = time.perf_counter()
     inequality = qp.contact == "inequality"
@@ -66,7 +66,7 @@ def solve(qp: QPProblem, solver: str, settings: dict[str, Any]) -> QPOutcome:
     problem = qpsolvers.Problem(K, qp.q, G=G, h=h, A=A, b=b)
     setup = time.perf_counter()
     options = {**FIXED_SETTINGS.get(solver, {}), **settings}
-    found = qpsolvers.solve_problem(problem, solver=solver, verbose=False, **options)
+    found = qpsolvers.solve_problem(problem, solver=solver, verbose=verbose, **options)
     solved = time.perf_counter()
     # qp.rows() order: ties (in A) then walls (in G for inequality, after the ties in A else)
     dual = np.concatenate((_part(found.y, qp.n_ties), _part(found.z, qp.g.size))) if inequality \

@@ -1,0 +1,103 @@
+"""Random scenes for property tests: the families that hold every method to the check's
+guarantee (tests/test_guarantee.py, benchmarks/guarantee.py).
+
+A scene is drawn from a numpy Generator, so a seed names it. The families are wide on
+purpose: element areas over five decades with stiff and soft elements side by side, moduli
+over three, lengths over two; one to three bars, each held by one or two supports; point and
+distributed loads of either sign; walls on one side or both, with zero gaps, small and large
+open gaps and press fits (negative gaps); contacts between bars. Gaps are drawn relative to
+the displacement the loads cause, so that contacts open, close and touch in every mix.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from contactqp.errors import SceneError
+from contactqp.model import build_model
+from contactqp.scene import Bar, BarContact, DistributedLoad, Load, Scene, Support, Wall
+
+
+def random_bar(rng: np.random.Generator, max_elements: int = 8) -> Bar:
+    """A bar of 1 to ``max_elements`` elements: areas log-uniform over 1e-7 to 1e-2 m², half
+    the bars with some elements made 1e2 to 1e5 times stiffer; E from 1e9 to 1e12 Pa;
+    lengths from 0.01 to 1 m."""
+    n = int(rng.integers(1, max_elements + 1))
+    areas = 10.0 ** rng.uniform(-7.0, -2.0, n)
+    if rng.random() < 0.5:
+        stiff = rng.random(n) < 0.5
+        areas[stiff] = np.minimum(areas[stiff] * 10.0 ** rng.uniform(2.0, 5.0, stiff.sum()), 1.0)
+    return Bar.from_areas(areas, float(10.0 ** rng.uniform(9.0, 12.0)),
+                          lengths=10.0 ** rng.uniform(-2.0, 0.0, n))
+
+
+def _gap(rng: np.random.Generator, scale: float, press_fit: bool = True) -> float:
+    """Zero (30 %), an open gap from 1e-4 to 2 times ``scale`` (60 %), or a press fit of 1e-3
+    to 0.3 times ``scale`` (10 %, when allowed)."""
+    draw = rng.random()
+    if draw < 0.3:
+        return 0.0
+    if draw < 0.9 or not press_fit:
+        return float(scale * 10.0 ** rng.uniform(-4.0, 0.3))
+    return -float(scale * 10.0 ** rng.uniform(-3.0, -0.5))
+
+
+def random_scene(rng: np.random.Generator, max_bars: int = 3, max_elements: int = 8,
+                 contacts: bool = True) -> Scene:
+    """A random scene (module docstring); redrawn until the scene is valid (a scene whose
+    walls leave a node no position is refused by Scene itself)."""
+    for _ in range(100):
+        try:
+            return _draw(rng, max_bars, max_elements, contacts)
+        except SceneError:
+            continue
+    raise SceneError("random_scene: no valid scene in 100 draws")
+
+
+def _draw(rng: np.random.Generator, max_bars: int, max_elements: int, contacts: bool) -> Scene:
+    bars = tuple(random_bar(rng, max_elements) for _ in range(int(rng.integers(1, max_bars + 1))))
+    supports, loads, distributed = [], [], []
+    for b, bar in enumerate(bars):
+        nodes = bar.n_nodes
+        held = {int(rng.integers(0, nodes))} if rng.random() < 0.3 else {0}
+        if rng.random() < 0.3 and nodes > 2:
+            held.add(int(rng.integers(1, nodes)))
+        supports += [Support(node, b) for node in sorted(held)]
+        free = [i for i in range(nodes) if i not in held]
+        for _ in range(int(rng.integers(0, 3)) if free else 0):
+            force = float(rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(2.0, 7.0))
+            loads.append(Load(int(rng.choice(free)), force, b))
+        if rng.random() < 0.2:
+            distributed.append(
+                DistributedLoad(float(rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(3.0, 7.0)), b))
+    if not loads and not distributed:  # something must load the scene
+        b = int(rng.integers(0, len(bars)))
+        loads.append(Load(bars[b].n_nodes - 1 if Support(bars[b].n_nodes - 1, b) not in supports
+                          else 0, 1e4, b))
+    loaded = Scene(bars if len(bars) > 1 else bars[0], tuple(supports), tuple(loads),
+                   distributed=tuple(distributed))
+    scale = max(float(np.abs(build_model(loaded).free_displacement).max(initial=0.0)), 1e-9)
+    held_nodes = set(loaded.support_nodes.tolist())
+    walls = []
+    for b, bar in enumerate(bars):
+        for node in range(bar.n_nodes):
+            if loaded.global_node(b, node) in held_nodes or rng.random() < 0.5:
+                continue
+            sides = ("+",) if rng.random() < 0.4 else ("-",) if rng.random() < 0.5 else ("+", "-")
+            gaps = [_gap(rng, scale) for _ in sides]
+            if len(gaps) == 2 and gaps[0] + gaps[1] < 0.0:  # room for the node: g₊ + g₋ >= 0
+                gaps[1] = -gaps[0] if rng.random() < 0.5 else abs(gaps[1]) + max(-gaps[0], 0.0)
+            walls += [Wall(node, g, side, b) for g, side in zip(gaps, sides)]
+    between = []
+    if contacts and len(bars) > 1:
+        for _ in range(int(rng.integers(1, 3))):
+            a, b = (int(i) for i in rng.choice(len(bars), size=2, replace=False))
+            node_a, node_b = int(rng.integers(0, bars[a].n_nodes)), int(rng.integers(0, bars[b].n_nodes))
+            if any((c.bar_a, c.node_a, c.bar_b, c.node_b) == (a, node_a, b, node_b) for c in between):
+                continue
+            between.append(BarContact(a, node_a, b, node_b, _gap(rng, scale, press_fit=False)))
+    return Scene(loaded.bar, loaded.supports, loaded.loads, tuple(walls),
+                 distributed=loaded.distributed, contacts=tuple(between))
+
+
+__all__ = ["random_bar", "random_scene"]
