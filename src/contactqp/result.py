@@ -82,8 +82,6 @@ class Tolerances:
 
 TOLERANCES = Tolerances()
 
-# A held node moved by δ changes its own force by δ·s and each neighbour's by at most δ·s
-GAP_WEIGHT = 3.0
 # What ``verified`` guarantees, relative to F and U (module docstring)
 GUARANTEE = (TOLERANCES.force, TOLERANCES.displacement)
 
@@ -223,7 +221,7 @@ def error_bounds(scene: Scene, u: np.ndarray, lam: np.ndarray, slots: np.ndarray
     pulling force are moved off them as loads, and what equilibrium leaves over is a load too.
     With the held nodes fixed, those loads' effect is computed exactly, run by run between
     held nodes (:func:`propagate`); a held node moved by δ moves its runs by at most δ and
-    changes its own force by δ·s and each neighbour's by less (3·δ·s in all)."""
+    changes the forces at itself and its held neighbours (:func:`gap_forces`)."""
     rows, row_nodes, _, gaps = scene.contact_rows
     n_rows = gaps.size
     pen = penetration(scene, u)
@@ -245,9 +243,15 @@ def error_bounds(scene: Scene, u: np.ndarray, lam: np.ndarray, slots: np.ndarray
     kept_external[n_loads:n_loads + row_nodes.size][~pushing[rows]] = 0.0
     force_error, sway = propagate(scene, held, slots, nodes, kept_external)
     pair = 0.0 if equality else _both_sides(scene, lam)
-    gap_force = _largest(delta * s)
-    force_bound = max(force_error, _largest(moved)) + GAP_WEIGHT * gap_force + pair
-    displacement_bound = sway + _largest(delta)
+    # an open row moved onto its wall (it penetrates) is held too, with no force of its own
+    gap_force = gap_forces(scene, held, row_nodes, delta[rows])
+    force_bound = max(force_error, _largest(moved)) + gap_force + pair
+    # a pushing bar contact is held at both ends above, but the two ends move together: the
+    # force error it carries moves them by that force over the stiffness both bars give them
+    # there, and their neighbours' forces by up to as much again
+    give = _contact_give(scene, held, pushing)
+    displacement_bound = sway + _largest(delta) + force_bound * give
+    force_bound *= 2.0 if give > 0.0 else 1.0
     feasibility = _largest((np.abs(pen) if equality else np.maximum(pen, 0.0)) * s) / F
     residuals: dict[str, float | None] = {"equilibrium": r_max / F, "feasibility": feasibility}
     if equality:
@@ -318,6 +322,45 @@ def propagate(scene: Scene, held: np.ndarray, slots: np.ndarray, nodes: np.ndarr
     return _largest(c_left - c_right), sway
 
 
+def _contact_give(scene: Scene, held: np.ndarray, pushing: np.ndarray) -> float:
+    """The largest 1/(s_a + s_b) (m/N) over the pushing bar contacts: how far a unit force
+    error moves the two ends of a contact together, s_a and s_b the stiffness each end sees
+    in its own bar with the other held nodes fixed (a supported end does not move)."""
+    n_walls = len(scene.walls)
+    give = 0.0
+    for i, c in enumerate(scene.contacts):
+        if not pushing[n_walls + i]:
+            continue
+        ends = np.array([scene.global_node(c.bar_a, c.node_a),
+                         scene.global_node(c.bar_b, c.node_b)])
+        if np.isin(ends, scene.support_nodes).any():
+            continue
+        stiffness = seen_stiffness(scene, np.setdiff1d(held, ends), ends)
+        give = max(give, 1.0 / float(stiffness.sum()))
+    return give
+
+
+def gap_forces(scene: Scene, held: np.ndarray, nodes: np.ndarray, delta: np.ndarray) -> float:
+    """The largest force change (N) at a held node when the contact nodes ``nodes`` move by
+    ``delta`` (m) with the other held nodes fixed: a node moved by δ between held neighbours
+    at compliances c_l and c_r changes its own force by δ(1/c_l + 1/c_r) and each neighbour's
+    by δ/c. A moved node that is not held (an open contact that penetrates) counts as held."""
+    moving = np.unique(np.concatenate((held, nodes[delta > 0.0])))
+    if moving.size == 0:
+        return 0.0
+    by_node = np.zeros(moving.size)
+    listed = np.isin(nodes, moving)
+    np.maximum.at(by_node, np.searchsorted(moving, nodes[listed]), delta[listed])
+    bar = np.searchsorted(scene.node_offsets, moving, side="right") - 1
+    same = bar[1:] == bar[:-1]
+    with np.errstate(divide="ignore"):
+        link = np.where(same, 1.0 / np.diff(scene.compliance[moving]), 0.0)  # 1/c to the next
+    to_left, to_right = np.r_[0.0, link], np.r_[link, 0.0]
+    shifted_left, shifted_right = np.r_[0.0, by_node[:-1]], np.r_[by_node[1:], 0.0]
+    change = (by_node * (to_left + to_right) + shifted_left * to_left + shifted_right * to_right)
+    return _largest(change)
+
+
 def row_stiffness(scene: Scene, held: np.ndarray) -> np.ndarray:
     """The stiffness (N/m) each contact row sees with the supports and ``held`` nodes fixed:
     a wall, its node's (:func:`seen_stiffness`); a bar contact, its two nodes' in series (a
@@ -330,19 +373,30 @@ def row_stiffness(scene: Scene, held: np.ndarray) -> np.ndarray:
 
 
 def _both_sides(scene: Scene, lam: np.ndarray) -> float:
-    """The largest min(λ₊, λ₋) of a node with a wall on each side (N): a node cannot be
-    pushed from both sides at once, whatever the gaps; the common part is a pair of forces
-    that moves nothing and is wrong in both walls."""
-    n_walls = len(scene.walls)
-    if n_walls < 2:
-        return 0.0
-    _, nodes, signs, _ = scene.contact_rows
-    nodes, signs, force = nodes[:n_walls], signs[:n_walls], np.maximum(lam[:n_walls], 0.0)
+    """The largest common part of opposed contact forces (N): a node cannot be pushed from
+    both sides at once, whatever the gaps (walls on both sides of it, or a wall and a bar
+    contact whose other end is a support), nor two bars pushed apart and together by two
+    contacts between the same nodes. min(Σλ₊, Σλ₋) is a pair of forces that moves nothing
+    and is wrong in both rows (where the gaps leave the node one position, the rows alone
+    cannot tell how the force splits; the exact answer puts it on one)."""
+    rows, nodes, coefficients, gaps = scene.contact_rows
+    force = np.maximum(lam, 0.0)
+    free = ~np.isin(nodes, scene.support_nodes)
+    entries = np.bincount(rows[free], minlength=gaps.size)
+    single = free & (entries[rows] == 1)  # a wall, or a contact with one end held
     plus = np.zeros(scene.n_nodes)
     minus = np.zeros(scene.n_nodes)
-    plus[nodes[signs > 0]] = force[signs > 0]
-    minus[nodes[signs < 0]] = force[signs < 0]
-    return _largest(np.minimum(plus, minus))
+    np.add.at(plus, nodes[single & (coefficients > 0)], force[rows[single & (coefficients > 0)]])
+    np.add.at(minus, nodes[single & (coefficients < 0)], force[rows[single & (coefficients < 0)]])
+    common = _largest(np.minimum(plus, minus))
+    n_walls = len(scene.walls)
+    between: dict[tuple[int, int], float] = {}
+    for i, c in enumerate(scene.contacts):
+        if entries[n_walls + i] == 2:
+            key = (scene.global_node(c.bar_a, c.node_a), scene.global_node(c.bar_b, c.node_b))
+            between[key] = force[n_walls + i]
+            common = max(common, min(between[key], between.get(key[::-1], 0.0)))
+    return common
 
 
 def section_residual(forces: np.ndarray, nodes: np.ndarray, external: np.ndarray) -> float:

@@ -90,9 +90,11 @@ def _positive_finite_array(name: str, values: Any) -> np.ndarray:
     except (TypeError, ValueError):
         raise SceneError(f"{name} must be numbers, got {values!r}") from None
     if raw.dtype.kind not in "iuf":
-        for i, value in enumerate(raw.reshape(-1)):
+        items = values if isinstance(values, (list, tuple)) else raw.reshape(-1)
+        for i, value in enumerate(items):
             if not _is_number(value):
-                raise SceneError(f"{name}[{i}] must be a number, got {value!r}")
+                shown = value.item() if isinstance(value, np.generic) else value
+                raise SceneError(f"{name}[{i}] must be a number, got {shown!r}")
     if raw.size > MAX_ELEMENTS:
         raise SceneError(f"{name} has {raw.size} values; contactqp takes at most "
                          f"{MAX_ELEMENTS} elements in a scene")
@@ -418,6 +420,13 @@ class Scene:
                 raise SceneError(f"contact[{i}] repeats contact[{pairs[a, b]}]: keep the one with "
                                  "the smaller gap")
             pairs[a, b] = i
+            if a in held or b in held:  # one end held: a wall on the other end
+                free, side = (b, "-") if a in held else (a, "+")
+                if (free, side) in seen:
+                    raise SceneError(
+                        f"contact[{i}] holds its free end like a {side!r} wall (its other end is "
+                        f"a support) and repeats wall[{seen[free, side]}]: keep the one with the "
+                        "smaller gap")
         object.__setattr__(self, "supports", supports)
         object.__setattr__(self, "loads", loads)
         object.__setattr__(self, "walls", walls)

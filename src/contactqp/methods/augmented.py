@@ -16,7 +16,12 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp import linalg
-from contactqp.methods._active_set import active_set_loop, iteration_limit, positive_number
+from contactqp.methods._active_set import (
+    DECISION_RTOL,
+    active_set_loop,
+    iteration_limit,
+    positive_number,
+)
 from contactqp.methods.penalty import penalty_value
 from contactqp.model import Model, wall_stiffness
 from contactqp.result import Solution
@@ -58,17 +63,22 @@ def solve_augmented(model: Model, contact: str, *, penalty: float | None = None,
         Ca = C[active]
         rhs = P - Ca.T @ (lam[active] - eps * g[active])
         u = linalg.solve(K + eps * (Ca.T @ Ca), rhs, spd=True)
-        trial = lam + eps * (C @ u - g)
-        return u, np.maximum(trial, 0.0) if unilateral else trial
+        return u, lam + eps * (C @ u - g)
 
     def update(active: np.ndarray, u: np.ndarray, trial: np.ndarray) -> np.ndarray:
-        return trial > 0.0
+        # a round-off band, as in the penalty's and Lagrange's loops: a node clamped between
+        # two walls (gaps summing to 0) sits on both, and its two trial forces are ± round-off
+        # (without the band the set cycled on 21 of 6000 random scenes)
+        band = DECISION_RTOL * max(float(np.abs(trial).max(initial=0.0)),
+                                   float(np.abs(P).max(initial=0.0)))
+        return np.where(active, trial > -band, trial > band)
 
     previous = np.inf
     for iteration in range(1, max_iterations + 1):
         if unilateral:
-            u, new_lam, _ = active_set_loop(model.n_contacts, step, update, method="augmented",
-                                            start=lam > 0.0)
+            u, trial, _ = active_set_loop(model.n_contacts, step, update, method="augmented",
+                                          start=lam > 0.0)
+            new_lam = np.maximum(trial, 0.0)
         else:
             u, new_lam = step(np.ones(model.n_contacts, dtype=bool))
         change = float(np.abs(new_lam - lam).max(initial=0.0))

@@ -1,0 +1,143 @@
+"""``verified`` means right: every method and solver, held to the check's bound on random scenes.
+
+The guarantee (contactqp.result): a verified Result has every contact force within
+``force_error_bound`` (N) of the exact answer and every displacement within
+``displacement_error_bound`` (m), and those are at most 1e-5·F and 1e-5·U (GUARANTEE), F and U
+the scene's own scales. The exact answer comes from contactqp.reference (statics in extended
+precision for one bar with walls, exact rational arithmetic otherwise; itself tested against
+closed forms, Fractions and brute force in test_reference.py), never from a method under test.
+
+The scenes (contactqp.random_scenes): areas over five decades with stiff and soft elements side
+by side, one to three bars, zero gaps, press fits, walls on both sides, bar contacts,
+distributed loads. Each scene is solved by every method in every formulation it takes and by
+every installed QP backend and solver (formulation, accuracy and scaling drawn per scene).
+Under CI the examples are fixed (conftest); run locally, hypothesis draws fresh seeds.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import contactqp
+from contactqp.random_scenes import random_scene
+from contactqp.reference import reference
+
+QP_PAIRS = [(s.backend, s.solver) for s in contactqp.available_qp_solvers() if s.available]
+# The reference is exact to ~1e-13 of F and U (extended precision over at most a few dozen
+# elements; exact for the rational path), and a bound computed in double precision from sums
+# over as many elements rounds at ~1e-14: 1e-12 covers both.
+ROUND_OFF = 1e-12
+
+
+def runs(rng: np.random.Generator) -> list[tuple[str, dict, str]]:
+    """(method, options, formulation) for every method and every installed QP solver."""
+    out = [("lagrange", {}, f) for f in ("full", "condensed", "strain")]
+    out += [("penalty", {}, f) for f in ("full", "condensed")]
+    out += [("augmented", {}, f) for f in ("full", "condensed")]
+    for backend, solver in QP_PAIRS:
+        out.append(("qp", {"backend": backend, "solver": solver,
+                           "accuracy": str(rng.choice(["default", "high"])),
+                           "scale": bool(rng.random() < 0.8)},
+                    str(rng.choice(["full", "condensed", "strain"]))))
+    return out
+
+
+def solve_quietly(scene, method, options, formulation):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # solvers' own warnings: the check decides
+        return contactqp.solve(scene, method, "inequality", formulation, **options)
+
+
+def assert_within_bound(result: contactqp.Result, exact) -> None:
+    """A verified Result is within its own bounds, and those within the guarantee."""
+    F, U = result.force_scale, result.displacement_scale
+    force_error = float(np.abs(result.contact_force - exact.contact_force).max(initial=0.0))
+    displacement_error = float(np.abs(result.u - exact.displacement).max())
+    context = f"{result.label} {result.options}: {result.residuals}"
+    assert force_error <= result.force_error_bound + ROUND_OFF * F, context
+    assert displacement_error <= result.displacement_error_bound + ROUND_OFF * U, context
+    assert result.force_error_bound <= contactqp.GUARANTEE[0] * F
+    assert result.displacement_error_bound <= contactqp.GUARANTEE[1] * U
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 2**32 - 1))
+def test_every_verified_answer_is_within_its_bound(seed):
+    rng = np.random.default_rng(seed)
+    scene = random_scene(rng, max_bars=1)
+    exact = reference(scene)
+    for method, options, formulation in runs(rng):
+        try:
+            result = solve_quietly(scene, method, options, formulation)
+        except contactqp.ContactqpError:  # refused with a reason (e.g. strain for penalty)
+            continue
+        if result.verified:
+            assert_within_bound(result, exact)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 2**32 - 1))
+def test_the_exact_methods_are_verified(seed):
+    """The explicit Lagrange method is exact to round-off: the check must not flag it (a check
+    that flags right answers is no check either)."""
+    rng = np.random.default_rng(seed)
+    scene = random_scene(rng, max_bars=1)
+    try:
+        result = contactqp.solve(scene, "lagrange")
+    except contactqp.SolverError as error:  # the textbook loop may cycle, and says so
+        assert "cycles" in str(error)
+        return
+    assert result.verified and result.physical, result.message
+    assert_within_bound(result, reference(scene))
+
+
+def test_a_force_left_on_a_weakly_active_wall_beside_a_soft_element_is_caught():
+    """Support, a soft element (k₀), a zero-gap wall at node 1 that the exact answer leaves
+    with no force (the loads beyond it cancel), then stiff elements. By hand: u = [0, 0, 0,
+    −F/k₂], λ = 0, no reaction. A force f left on that wall compresses k₀ by f/k₀, which moves
+    everything beyond by as much: with k₂/k₀ = 1e3, f = 0.5e-5·F moves the bar by 5e-3 of
+    U = F/k₂. Every force residual passes it; the displacement residual does not (interior-
+    point solvers leave such forces: the old check passed answers 1e-4 to 7e-4 off in u)."""
+    soft, stiff = 1e-6, 1e-3  # m², E = 2e11, 1 m elements: k₀ = 2e5, k₁ = k₂ = 2e8 N/m
+    k0, k2, F = 2e11 * soft, 2e11 * stiff, 1e4
+    scene = contactqp.Scene(contactqp.Bar.from_areas([soft, stiff, stiff], 2e11, length=3.0),
+                            (contactqp.Support(0),),
+                            (contactqp.Load(2, F), contactqp.Load(3, -F)),
+                            (contactqp.Wall(1, 0.0, "+"),))
+    exact_u = np.array([0.0, 0.0, 0.0, -F / k2])
+    right = contactqp.check(scene, exact_u, [0.0], [0.0], "inequality")
+    assert right.verified and right.force_error_bound == 0.0
+    left = 0.5e-5 * F
+    u = exact_u - np.array([0.0, 1.0, 1.0, 1.0]) * left / k0  # node 1 and all beyond it move
+    found = contactqp.check(scene, u, [left], [left], "inequality")  # the support takes it back
+    assert found.residuals["equilibrium"] <= 1e-12  # in balance
+    # the wall stands off by f/k₀, and the force to close that against k₀ is f: min(f, f) / F
+    assert found.residuals["complementarity"] == pytest.approx(0.5e-5, rel=1e-9)
+    assert found.residuals["force"] <= 1e-5  # every force within 1e-5 F: the forces are right
+    # the bar moved by f/k₀ against U = F/k₂, the free displacement of node 3
+    assert found.residuals["displacement"] == pytest.approx((left / k0) / (F / k2), rel=1e-9)
+    assert not found.verified and "displacement" in found.message
+
+
+def test_the_issue_penalty_scene_is_flagged():
+    """A stiff element holds the wall at node 1 (k₀ = 2.1e12 N/m), soft ones make u large:
+    the textbook penalty ε = 1e14 N/m leaves s/ε = 2 % of the force, which the old check
+    passed (it measured the penetration against u). Exact: both loads end at the wall,
+    1.1e6 N."""
+    scene = contactqp.Scene(
+        contactqp.Bar.from_areas([1e-1, 1e-5, 1e-5], 210e9, lengths=[0.01, 0.3, 0.3]),
+        (contactqp.Support(0),), (contactqp.Load(1, 1e6), contactqp.Load(3, 1e5)),
+        (contactqp.Wall(1, 0.0, "+"),))
+    textbook = contactqp.solve(scene, "penalty", penalty=1e14)
+    k0 = 210e9 * 1e-1 / 0.01
+    # λ_ε = P·ε/(ε + k₀): the wall node as a spring k₀ behind the penalty spring
+    assert textbook.contact_force[0] == pytest.approx(1.1e6 * 1e14 / (1e14 + k0), rel=1e-9)
+    assert not textbook.verified and "feasibility" in textbook.message
+    default = contactqp.solve(scene, "penalty")  # ε = 1e8 x the stiffness the wall sees
+    assert default.verified
+    assert default.contact_force[0] == pytest.approx(1.1e6, rel=2e-8)  # s/ε = 1e-8
