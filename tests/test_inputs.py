@@ -91,22 +91,22 @@ def test_solve_reads_a_scene_file_given_its_path(tmp_path):
 
 
 BAD_FILES = [  # (a scene file, words of the one error line)
-    ("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = ['1e-3']\n"
-     "[[support]]\nnode = 0\n", ["bar.areas[0]", "'1e-3'"]),
-    ("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [true]\n"
-     "[[support]]\nnode = 0\n", ["bar.areas[0]", "True"]),
-    ("[material]\nyoungs_modulus = true\n[bar]\nlength = 1.0\nareas = [1e-3]\n"
-     "[[support]]\nnode = 0\n", ["youngs_modulus", "True"]),
-    ("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nelements = 1000000000000\n"
+    (("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = ['1e-3']\n"
+     "[[support]]\nnode = 0\n"), ["bar.areas[0]", "'1e-3'"]),
+    (("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [true]\n"
+     "[[support]]\nnode = 0\n"), ["bar.areas[0]", "True"]),
+    (("[material]\nyoungs_modulus = true\n[bar]\nlength = 1.0\nareas = [1e-3]\n"
+     "[[support]]\nnode = 0\n"), ["youngs_modulus", "True"]),
+    (("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nelements = 1000000000000\n"
      "section = { shape = 'circle', diameter_start = 0.04, diameter_end = 0.02 }\n"
-     "[[support]]\nnode = 0\n", ["bar.elements"]),
-    ("units = 'cm'\n[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [1e-3]\n"
-     "[[support]]\nnode = 0\n", ["units", "'cm'"]),
-    ("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [1e-3]\n"
-     "[[support]]\nnode = 0\n[[load]]\nnode = 1\nforce = 1e308\n", ["load[0].force"]),
-    ("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [1e-3, 1e-3]\n"
+     "[[support]]\nnode = 0\n"), ["bar.elements"]),
+    (("units = 'cm'\n[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [1e-3]\n"
+     "[[support]]\nnode = 0\n"), ["units", "'cm'"]),
+    (("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [1e-3]\n"
+     "[[support]]\nnode = 0\n[[load]]\nnode = 1\nforce = 1e308\n"), ["load[0].force"]),
+    (("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [1e-3, 1e-3]\n"
      "[[support]]\nnode = 0\n[[wall]]\nnode = 1\ngap = 1e-4\nside = '+'\n"
-     "[[wall]]\nnode = 1\ngap = -2e-4\nside = '-'\n", ["wall[0]", "wall[1]", "node 1"]),
+     "[[wall]]\nnode = 1\ngap = -2e-4\nside = '-'\n"), ["wall[0]", "wall[1]", "node 1"]),
 ]
 
 
@@ -203,7 +203,7 @@ def test_studies_exit_0_with_failing_rows_and_say_so(capsys):
 
 
 def test_an_unexpected_error_is_one_line_and_exit_3(capsys, monkeypatch):
-    import contactqp.cli as cli
+    from contactqp import cli
 
     def broken(*args, **kwargs):
         raise ZeroDivisionError("float division by zero")
