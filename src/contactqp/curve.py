@@ -161,6 +161,7 @@ def _stepped(model: Model, condensed: tuple[Condensed, float] | None, factors: n
         u_free = scaled_condensed.displacements(step.contact_force)
         solved = time.perf_counter()
         scaled = replace(model, scene=scene.scaled_loads(t), P=t * model.P)
+        scaled.__dict__["free_displacement"] = scaled_condensed.u0  # K⁻¹P, for the check
         results.append(make_result(
             scaled, replace(step, u_free=u_free), method=method, contact=contact,
             options={**options, "formulation": "condensed", "load_factor": float(t)},
