@@ -26,21 +26,28 @@ each active set A is solved exactly from its KKT system
     K u + C_Aᵀ λ_A = P,   C_A u = g_A,   u = 0 at the supports,
 
 the minimum of ½uᵀKu − Pᵀu with the rows of A held as equalities, by Gaussian elimination on
-sparse rows (K is tridiagonal per bar, a contact row has one or two entries). Contact rows
-are edges of a graph whose vertices are the free nodes and "ground" (the supports): a wall
-joins its node to ground, a bar contact its two nodes. A set of rows is linearly independent
-exactly when its edges form a forest, so A is kept a forest: a row that would close a cycle
-(the second wall of a node clamped between gaps summing to 0, say) stays inactive with λ = 0,
-and the answer is the one where only the wall the net force pushes against carries it.
+sparse rows (K is tridiagonal per bar, a contact row has one or two entries; no element joins
+consecutive bars).
 
 For both paths A is found by the textbook loop: add every penetrated row, drop every pulling
 one. The answer is returned only with its certificate: every active row pushes (λ >= 0) and no
 inactive row is penetrated (exactly, on the rational path). The energy is strictly convex
-(every bar has a support), so a certified A gives the unique displacements; the contact
-forces are unique too unless active rows are dependent, and then the certified ones are a
-basic (forest) solution. Should the rational loop revisit an active set or run out of steps,
-every independent active set is tried, smallest first, when there are at most
-``MAX_ENUMERATED_ROWS`` contact rows; otherwise, and when nothing certifies, a SceneError.
+(every bar has a support), so a certified A gives the unique displacements.
+
+On the rational path the contact rows are the edges of a graph whose vertices are the free
+nodes and GROUND (the supports): a wall joins its node to GROUND, a bar contact its two nodes.
+A set of rows is linearly independent exactly when its edges form a forest, and A is kept
+one: a penetrated row that closes a cycle takes the place of a row of the cycle that must
+open for it (:meth:`_ExactScene.exchange`), and a row whose cycle is consistent (the second
+wall of a node clamped between gaps summing to exactly 0) is never penetrated, so it stays
+inactive with λ = 0: only the wall the net force pushes against carries it. The contact
+forces are unique unless active rows are dependent, and then they are a basic (forest)
+solution. Should the loop come back to an active set (it can cycle once bar contacts join
+the walls) or run out of steps, the primal active-set method takes over, which ends in exact
+arithmetic barring degenerate cycles; should ``max_steps`` cut that short too, every
+independent active set is tried, the smallest first, when 2^rows · nodes² is at most
+``ENUMERATION_BUDGET``. Otherwise, and when nothing certifies (only a scene whose walls leave
+a node no position), a SceneError.
 """
 
 from __future__ import annotations
@@ -56,8 +63,8 @@ from contactqp.errors import SceneError
 from contactqp.scene import Scene
 
 CERTIFICATE = 1e-13  # relative: the arithmetic is ~1e-19, this leaves room for n up to 1e6
-# Exact arithmetic on a chain grows its numbers by ~53 bits per element: one solve of 400
-# nodes takes ~0.1 s, and an active-set loop a few dozen solves.
+# Exact arithmetic on a chain grows its numbers by ~53 bits per element, and a solve's cost
+# with them: ~0.5 s at 400 nodes (0.07 s at 200, 2 ms at 20); a loop takes a few solves.
 MAX_EXACT_NODES = 400
 # The last resort tries up to 2^rows active sets, each a solve costing ~nodes²: at most
 # 10 rows on 40 nodes (seconds), 4 rows at MAX_EXACT_NODES.
@@ -81,9 +88,9 @@ def reference(scene: Scene, max_steps: int | None = None) -> Reference:
     """The exact unilateral contact solution of ``scene`` (module docstring): statics in
     extended precision for one bar with walls only, exact rational arithmetic otherwise.
 
-    Raises SceneError when the active-set loop does not reach a certified answer in
-    ``max_steps`` (default 2·rows + 10) steps, and for a scene beyond the rational path's
-    reach (more than ``MAX_EXACT_NODES`` nodes).
+    ``max_steps`` (default 2·rows + 10) bounds each active-set loop. Raises SceneError when
+    no certified answer is reached within them (and, on the rational path, its fallbacks),
+    and for a scene beyond the rational path's reach (more than ``MAX_EXACT_NODES`` nodes).
     """
     if len(scene.bars) == 1 and not scene.contacts:
         return statics_reference(scene, max_steps)
@@ -216,10 +223,14 @@ def solve_exact(equations: list[dict[int, Fraction]], rhs: list[Fraction]) -> li
     return x
 
 
+Answer = tuple[list[Fraction], list[Fraction]]  # (u per node, λ per row), certified
+
+
 @dataclass
 class _ExactScene:
     """A scene's data in exact rationals, global node numbering, and the solves so far."""
 
+    name: str
     n_nodes: int
     held: frozenset[int]
     slots: list[Fraction]  # stiffness between nodes j and j + 1 (0 at a junction)
@@ -234,7 +245,7 @@ class _ExactScene:
         row_ids, nodes, values, gaps = scene.contact_rows
         for r, node, value in zip(row_ids.tolist(), nodes.tolist(), values.tolist()):
             rows[r].append((node, int(value)))
-        return cls(scene.n_nodes, frozenset(scene.support_nodes.tolist()),
+        return cls(scene.name, scene.n_nodes, frozenset(scene.support_nodes.tolist()),
                    [Fraction(k) for k in scene.slot_stiffness.tolist()],
                    [Fraction(p) for p in scene.nodal_loads().tolist()],
                    [tuple(r) for r in rows], [Fraction(g) for g in gaps.tolist()])
@@ -376,8 +387,9 @@ class _ExactScene:
             if not changed:
                 break
         else:
-            raise SceneError("the walls and contacts leave some node no position (their gaps "
-                             "around a cycle sum below 0, in exact arithmetic)")
+            raise SceneError(f"scene {self.name!r}: its walls and contacts leave some node no "
+                             "position (their gaps around a cycle sum below 0, in exact "
+                             "arithmetic)")
         u = [Fraction(0)] * self.n_nodes
         for v, d in distance.items():
             if v != GROUND:
@@ -415,9 +427,6 @@ def rational_reference(scene: Scene, max_steps: int | None = None) -> Reference:
                      np.array([float(x) for x in u], dtype=float), exact.solves, 0.0)
 
 
-Answer = tuple[list[Fraction], list[Fraction]]  # (u per node, λ per row), certified
-
-
 def _textbook_loop(exact: _ExactScene, max_steps: int) -> Answer | None:
     """Add every penetrated row, drop every pulling one (module docstring); None when an
     active set comes back (the loop would cycle) or after ``max_steps`` solves."""
@@ -438,7 +447,8 @@ def _textbook_loop(exact: _ExactScene, max_steps: int) -> Answer | None:
 
 def _primal_loop(exact: _ExactScene, max_steps: int) -> Answer | None:
     """The primal active-set method (Nocedal & Wright, Numerical Optimization, algorithm
-    16.3): from a feasible u, step towards the minimum on the working set's rows held as
+    16.3): from a feasible u (:meth:`_ExactScene.feasible_point`) and its tight rows as the
+    working set (a forest of them), step towards the minimum with the working rows held as
     equalities, stopping at the first row in the way, which joins the set (it is
     independent of the set: the step moves along it, not along theirs); at the minimum,
     drop the most pulling row, or stop certified. Every step keeps u feasible and lowers the

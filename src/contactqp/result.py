@@ -204,6 +204,9 @@ def _failed(scene: Scene, contact: str, lam: np.ndarray, F: float, U: float,
     return Check(residuals, False, physical, "; ".join(notes), math.inf, math.inf, F, U)
 
 
+ROUND_OFF = 4.0 * np.finfo(float).eps  # a few units in the last place of what is stored
+
+
 @dataclass(frozen=True)
 class Bounds:
     residuals: dict[str, float | None]
@@ -221,7 +224,7 @@ def error_bounds(scene: Scene, u: np.ndarray, lam: np.ndarray, slots: np.ndarray
     pulling force are moved off them as loads, and what equilibrium leaves over is a load too.
     With the held nodes fixed, those loads' effect is computed exactly, run by run between
     held nodes (:func:`propagate`); a held node moved by δ moves its runs by at most δ and
-    changes the forces at itself and its held neighbours (:func:`gap_forces`)."""
+    changes the forces at itself and its held neighbours (:func:`gap_moves`)."""
     rows, row_nodes, _, gaps = scene.contact_rows
     n_rows = gaps.size
     pen = penetration(scene, u)
@@ -235,7 +238,7 @@ def error_bounds(scene: Scene, u: np.ndarray, lam: np.ndarray, slots: np.ndarray
         stand_off = np.maximum(-pen, 0.0)
         pushing = lam > stand_off * s  # closing its gap is the smaller move
     held = np.unique(np.concatenate((scene.support_nodes, row_nodes[pushing[rows]])))
-    s = row_stiffness(scene, held)
+    s, s_ends = row_stiffness(scene, held, ends=True)
     delta = np.abs(pen) if equality else np.where(pushing, np.abs(pen), np.maximum(pen, 0.0))
     moved = np.where(pushing, 0.0, lam)  # an open row's force (or a pull) becomes a load
     n_loads = external.size - row_nodes.size - scene.support_nodes.size
@@ -244,14 +247,29 @@ def error_bounds(scene: Scene, u: np.ndarray, lam: np.ndarray, slots: np.ndarray
     force_error, sway = propagate(scene, held, slots, nodes, kept_external)
     pair = 0.0 if equality else _both_sides(scene, lam)
     # an open row moved onto its wall (it penetrates) is held too, with no force of its own
-    gap_force = gap_forces(scene, held, row_nodes, delta[rows])
-    force_bound = max(force_error, _largest(moved)) + gap_force + pair
+    # closing a bar contact's gap δ moves each end by its share, δ·s/s_end (a wall's node: δ)
+    with np.errstate(invalid="ignore"):
+        end_moves = np.where(np.isfinite(s_ends), delta[rows] * s[rows] / s_ends, 0.0)
+    gap_force, gap_move, moves = gap_moves(scene, held, row_nodes, end_moves, pushing)
+    # ... and a held node that moves drags its run along: an open contact there whose gap is
+    # smaller than that would close, and take what closing the rest of the move needs
+    # (measured: quadprog left a wall 2.5e-12 m open beside one held 1.7e-11 m off, across
+    # an element of 7e13 N/m, 963 N off and verified without this)
+    closing = 0.0 if equality else _closing(scene, moves, row_nodes, rows,
+                                            np.where(pushing, np.inf, np.maximum(-pen, 0.0)), s)
+    force_bound = max(force_error, _largest(moved)) + gap_force + pair + closing
     # a pushing bar contact is held at both ends above, but the two ends move together: the
     # force error it carries moves them by that force over the stiffness both bars give them
-    # there, and their neighbours' forces by up to as much again
+    # there, and its bars' forces and displacements by up to as much again (measured: without
+    # the factor 2, up to 1.4 times the bound on random scenes of several bars)
     give = _contact_give(scene, held, pushing)
-    displacement_bound = sway + _largest(delta) + force_bound * give
-    force_bound *= 2.0 if give > 0.0 else 1.0
+    coupled = 2.0 if give > 0.0 else 1.0
+    displacement_bound = coupled * (sway + gap_move) + force_bound * give
+    force_bound *= coupled
+    # and the answer itself is only stored to a few units of round-off: a force of 2e8 N from
+    # a press fit on a stiff element is one float step (3e-8 N) from any other
+    force_bound += ROUND_OFF * max(_largest(lam), _largest(slots), F)
+    displacement_bound += ROUND_OFF * max(_largest(u), U)
     feasibility = _largest((np.abs(pen) if equality else np.maximum(pen, 0.0)) * s) / F
     residuals: dict[str, float | None] = {"equilibrium": r_max / F, "feasibility": feasibility}
     if equality:
@@ -340,17 +358,37 @@ def _contact_give(scene: Scene, held: np.ndarray, pushing: np.ndarray) -> float:
     return give
 
 
-def gap_forces(scene: Scene, held: np.ndarray, nodes: np.ndarray, delta: np.ndarray) -> float:
-    """The largest force change (N) at a held node when the contact nodes ``nodes`` move by
-    ``delta`` (m) with the other held nodes fixed: a node moved by δ between held neighbours
-    at compliances c_l and c_r changes its own force by δ(1/c_l + 1/c_r) and each neighbour's
-    by δ/c. A moved node that is not held (an open contact that penetrates) counts as held."""
+def gap_moves(scene: Scene, held: np.ndarray, nodes: np.ndarray, delta: np.ndarray,
+              pushing: np.ndarray) -> tuple[float, float, tuple[np.ndarray, np.ndarray]]:
+    """What moving the contact nodes ``nodes`` by ``delta`` (m) with the other held nodes fixed
+    does: (the largest force change at a held node, N; the largest move, m; each held node's
+    move). A node moved by δ
+    between held neighbours at compliances c_l and c_r changes its own force by
+    δ(1/c_l + 1/c_r) and each neighbour's by δ/c. The two ends of a pushing bar contact move
+    together: each moves by its own δ and the other end's. A moved node that is not held (an
+    open contact that penetrates) counts as held."""
     moving = np.unique(np.concatenate((held, nodes[delta > 0.0])))
     if moving.size == 0:
-        return 0.0
+        return 0.0, 0.0, (moving, np.zeros(0))
     by_node = np.zeros(moving.size)
     listed = np.isin(nodes, moving)
     np.maximum.at(by_node, np.searchsorted(moving, nodes[listed]), delta[listed])
+    n_walls = len(scene.walls)
+    tied = [(int(np.searchsorted(moving, scene.global_node(c.bar_a, c.node_a))),
+             int(np.searchsorted(moving, scene.global_node(c.bar_b, c.node_b))))
+            for i, c in enumerate(scene.contacts) if pushing[n_walls + i]]
+    if tied:  # every node of a chain of tied nodes moves by up to the sum of their moves
+        group = list(range(moving.size))
+
+        def root(i: int) -> int:
+            while group[i] != i:
+                i = group[i]
+            return i
+
+        for a, b in tied:
+            group[root(a)] = root(b)
+        members = np.array([root(i) for i in range(moving.size)])
+        by_node = np.bincount(members, by_node, minlength=moving.size)[members]
     bar = np.searchsorted(scene.node_offsets, moving, side="right") - 1
     same = bar[1:] == bar[:-1]
     with np.errstate(divide="ignore"):
@@ -358,27 +396,51 @@ def gap_forces(scene: Scene, held: np.ndarray, nodes: np.ndarray, delta: np.ndar
     to_left, to_right = np.r_[0.0, link], np.r_[link, 0.0]
     shifted_left, shifted_right = np.r_[0.0, by_node[:-1]], np.r_[by_node[1:], 0.0]
     change = (by_node * (to_left + to_right) + shifted_left * to_left + shifted_right * to_right)
-    return _largest(change)
+    return _largest(change), _largest(by_node), (moving, by_node)
 
 
-def row_stiffness(scene: Scene, held: np.ndarray) -> np.ndarray:
+def _closing(scene: Scene, moves: tuple[np.ndarray, np.ndarray], row_nodes: np.ndarray,
+             rows: np.ndarray, stand_off: np.ndarray, s: np.ndarray) -> float:
+    """The largest force an open contact would take if the held nodes at the ends of its run
+    moved as ``moves`` says ((sorted nodes, move of each, m)): (move − its stand-off)⁺ × the
+    stiffness it sees."""
+    held, shift = moves
+    if held.size == 0 or not np.isfinite(stand_off).any():
+        return 0.0
+    bar = np.searchsorted(scene.node_offsets, row_nodes, side="right") - 1
+    held_bar = np.searchsorted(scene.node_offsets, held, side="right") - 1
+    after = np.searchsorted(held, row_nodes, side="right")
+    left, right = np.maximum(after - 1, 0), np.minimum(after, held.size - 1)
+    induced = np.maximum(np.where((after > 0) & (held_bar[left] == bar), shift[left], 0.0),
+                         np.where((after < held.size) & (held_bar[right] == bar), shift[right],
+                                  0.0))
+    per_row = np.zeros(stand_off.size)
+    np.maximum.at(per_row, rows, induced)
+    return _largest(np.maximum(per_row - stand_off, 0.0) * np.where(np.isfinite(stand_off), s, 0.0))
+
+
+def row_stiffness(scene: Scene, held: np.ndarray,
+                  ends: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """The stiffness (N/m) each contact row sees with the supports and ``held`` nodes fixed:
     a wall, its node's (:func:`seen_stiffness`); a bar contact, its two nodes' in series (a
-    supported end is rigid)."""
+    supported end is rigid). With ``ends``, also the stiffness of each end (per nonzero of
+    :attr:`Scene.contact_rows`)."""
     rows, row_nodes, _, gaps = scene.contact_rows
     node_stiffness = seen_stiffness(scene, held, row_nodes)
     node_stiffness[np.isin(row_nodes, scene.support_nodes)] = np.inf
     with np.errstate(divide="ignore"):
-        return 1.0 / np.bincount(rows, 1.0 / node_stiffness, minlength=gaps.size)
+        row = 1.0 / np.bincount(rows, 1.0 / node_stiffness, minlength=gaps.size)
+    return (row, node_stiffness) if ends else row
 
 
 def _both_sides(scene: Scene, lam: np.ndarray) -> float:
-    """The largest common part of opposed contact forces (N): a node cannot be pushed from
-    both sides at once, whatever the gaps (walls on both sides of it, or a wall and a bar
-    contact whose other end is a support), nor two bars pushed apart and together by two
-    contacts between the same nodes. min(Σλ₊, Σλ₋) is a pair of forces that moves nothing
-    and is wrong in both rows (where the gaps leave the node one position, the rows alone
-    cannot tell how the force splits; the exact answer puts it on one)."""
+    """The largest common part of contact forces that oppose each other (N): a node cannot be
+    pushed from both sides at once, whatever the gaps (walls on both sides of it); nor can a
+    loop of walls and bar contacts whose gaps sum to zero carry a force all the way round.
+    min(Σλ₊, Σλ₋) at a node, and the smallest force around such a loop, is a set of forces
+    that moves nothing and is wrong in every row it is on (where the gaps leave the nodes one
+    position, the rows alone cannot tell how the force splits; the exact answer has one row of
+    each loop free of it)."""
     rows, nodes, coefficients, gaps = scene.contact_rows
     force = np.maximum(lam, 0.0)
     free = ~np.isin(nodes, scene.support_nodes)
@@ -389,13 +451,8 @@ def _both_sides(scene: Scene, lam: np.ndarray) -> float:
     np.add.at(plus, nodes[single & (coefficients > 0)], force[rows[single & (coefficients > 0)]])
     np.add.at(minus, nodes[single & (coefficients < 0)], force[rows[single & (coefficients < 0)]])
     common = _largest(np.minimum(plus, minus))
-    n_walls = len(scene.walls)
-    between: dict[tuple[int, int], float] = {}
-    for i, c in enumerate(scene.contacts):
-        if entries[n_walls + i] == 2:
-            key = (scene.global_node(c.bar_a, c.node_a), scene.global_node(c.bar_b, c.node_b))
-            between[key] = force[n_walls + i]
-            common = max(common, min(between[key], between.get(key[::-1], 0.0)))
+    for cycle in scene.tight_cycles:  # loops through bar contacts (Scene.tight_cycles)
+        common = max(common, float(force[list(cycle)].min()))
     return common
 
 

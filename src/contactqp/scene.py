@@ -440,9 +440,15 @@ class Scene:
         if sum(b.n_elements for b in bars) > MAX_ELEMENTS:
             raise SceneError(f"bar: {sum(b.n_elements for b in bars)} elements in all; contactqp "
                              f"takes at most {MAX_ELEMENTS} in a scene")
-        conflict = impossible_constraints(self)
+        conflict = impossible_constraints(self) or indeterminate_contacts(self)
         if conflict:
             raise SceneError(conflict)
+
+    @cached_property
+    def tight_cycles(self) -> tuple[tuple[int, ...], ...]:
+        """The contact rows of every zero-weight loop through a bar contact
+        (:func:`tight_cycles`)."""
+        return tight_cycles(self)
 
     @property
     def unit(self) -> Units:
@@ -620,82 +626,188 @@ class Scene:
         return replace(self, walls=tuple(walls))
 
 
-def impossible_constraints(scene: Scene) -> str:
-    """Why no displacement satisfies the scene's supports, walls and bar contacts together,
-    or "" when one does.
-
-    They are difference constraints: a support is u = 0, a "+" wall u ≤ g, a "−" wall
-    −u ≤ g, a bar contact u_a − u_b ≤ g. Such a system has a solution exactly when its
-    constraint graph (an edge w → v of weight c for each x_v − x_w ≤ c, the supports merged
-    into one zero node) has no cycle of negative total weight (Bellman–Ford); the cycle names
-    the constraints that conflict. Only the nodes of bar contacts can lie on a longer cycle:
-    any other walled node is checked on its own (its two walls' gaps must not sum below 0).
-    """
+def constraint_graph(scene: Scene) -> list[tuple[int, int, float, int, str]]:
+    """The scene's walls and bar contacts as difference constraints x_v − x_w <= c, each an
+    edge (w, v, c, contact row, what it says); vertex −1 is zero displacement, where the
+    supports are merged."""
     unit = scene.unit.length
-    offsets = scene.node_offsets
     supports = set(scene.support_nodes.tolist())
 
-    def where(node: int) -> str:
-        bar = int(np.searchsorted(offsets, node, side="right") - 1)
-        local = node - int(offsets[bar])
-        return f"node {local}" if len(scene.bars) == 1 else f"bar {bar} node {local}"
-
-    # edges: (from, to, weight, what it says); vertex -1 is zero displacement (the supports)
     def vertex(node: int) -> int:
         return -1 if node in supports else node
 
     edges = []
     for i, wall in enumerate(scene.walls):
         node = scene.global_node(wall.bar, wall.node)
+        where = _where(scene, node)
         if wall.side == "+":
-            edges.append((-1, node, wall.gap, f"wall[{i}] (u ≤ {wall.gap:.6g} {unit} at {where(node)})"))
+            edges.append((-1, node, wall.gap, i, f"wall[{i}] (u ≤ {wall.gap:.6g} {unit} at {where})"))
         else:
-            edges.append((node, -1, wall.gap, f"wall[{i}] (u ≥ {-wall.gap:.6g} {unit} at {where(node)})"))
+            edges.append((node, -1, wall.gap, i, f"wall[{i}] (u ≥ {0.0 - wall.gap:.6g} {unit} at {where})"))
     for i, c in enumerate(scene.contacts):
         a, b = scene.global_node(c.bar_a, c.node_a), scene.global_node(c.bar_b, c.node_b)
-        edges.append((vertex(b), vertex(a), c.gap,
-                      f"contact[{i}] (u at {where(a)} − u at {where(b)} ≤ {c.gap:.6g} {unit})"))
-    contact_nodes = {vertex(scene.global_node(c.bar_a, c.node_a)) for c in scene.contacts} | {
-        vertex(scene.global_node(c.bar_b, c.node_b)) for c in scene.contacts}
-    # a node on its own: its "+" and "−" walls
+        edges.append((vertex(b), vertex(a), c.gap, len(scene.walls) + i,
+                      (f"contact[{i}] (u at {_where(scene, a)} − u at {_where(scene, b)} ≤ "
+                      f"{c.gap:.6g} {unit})")))
+    return edges
+
+
+def _where(scene: Scene, node: int) -> str:
+    bar = int(np.searchsorted(scene.node_offsets, node, side="right") - 1)
+    local = node - int(scene.node_offsets[bar])
+    return f"node {local}" if len(scene.bars) == 1 else f"bar {bar} node {local}"
+
+
+def _contact_subgraph(scene: Scene, edges: list) -> list:
+    """The edges between bar-contact nodes and zero: the only ones on cycles longer than a
+    node's own two walls."""
+    ends = {v for edge in edges[len(scene.walls):] for v in edge[:2]}
+    return [edge for edge in edges if edge[0] in ends | {-1} and edge[1] in ends | {-1}]
+
+
+def impossible_constraints(scene: Scene) -> str:
+    """Why no displacement satisfies the scene's supports, walls and bar contacts together,
+    or "" when one does.
+
+    They are difference constraints (:func:`constraint_graph`). Such a system has a solution
+    exactly when its constraint graph has no cycle of negative total weight (Bellman–Ford);
+    the cycle names the constraints that conflict. Only the nodes of bar contacts can lie on
+    a longer cycle: any other walled node is checked on its own (its two walls' gaps must not
+    sum below 0).
+    """
+    unit = scene.unit.length
+    edges = constraint_graph(scene)
+    contact_nodes = {v for edge in edges[len(scene.walls):] for v in edge[:2]}
     sides: dict[int, dict[int, tuple[float, str]]] = {}
-    for start, end, weight, text in edges[: len(scene.walls)]:
+    for start, end, weight, _, text in edges[: len(scene.walls)]:
         node = end if start == -1 else start
         sides.setdefault(node, {})[1 if start == -1 else -1] = (weight, text)
     for node, pair in sides.items():
         if len(pair) == 2 and pair[1][0] + pair[-1][0] < 0.0 and node not in contact_nodes:
-            return (f"{pair[1][1]} and {pair[-1][1]} leave {where(node)} no position "
+            return (f"{pair[1][1]} and {pair[-1][1]} leave {_where(scene, node)} no position "
                     "(the gaps of its two walls sum below 0)")
     if not scene.contacts:
         return ""
-    graph = [(a, b, w, t) for a, b, w, t in edges
-             if (a == -1 or a in contact_nodes) and (b == -1 or b in contact_nodes)]
-    cycle = negative_cycle(graph)
+    _, cycle = shortest_paths(_contact_subgraph(scene, edges))
     if not cycle:
         return ""
-    total = sum(w for _, _, w, _ in cycle)
-    return (f"{', '.join(t for *_, t in cycle)} leave no position for the nodes they hold "
-            f"(together they need 0 ≤ {total:.6g} {unit})")
+    total = sum(edge[2] for edge in cycle)
+    return (f"{', '.join(edge[4] for edge in cycle)} leave no position for the nodes they "
+            f"hold (together they need 0 ≤ {total:.6g} {unit})")
 
 
-def negative_cycle(edges: list[tuple[int, int, float, str]]) -> list[tuple[int, int, float, str]]:
-    """The edges of a cycle of negative total weight in a directed graph given as
-    (from, to, weight, label) edges, or [] when there is none (Bellman–Ford from a virtual
-    source joined to every vertex by weight 0)."""
+def indeterminate_contacts(scene: Scene) -> str:
+    """Why the scene's contact forces would not be determined, or "" when they are.
+
+    Rows that tie nodes along a loop whose gaps add up exactly (the walls and bar contacts of
+    a loop, walked one way or the other) can all hold at once, and then a force can go round
+    the loop: the rows cannot tell how it splits. Where the loop runs one way (the two walls of
+    a clamped node, gaps summing to 0) the force all the way round is the common part, and the
+    exact answer is the one without it (contactqp.result). Where the loop has rows facing both
+    ways (a node held at the same position by a wall and, through a bar contact, by a wall of
+    another bar), the split is arbitrary: such a scene is refused, with the rows on the loop.
+    Found with a spanning forest of the ties, smallest gaps first: a tie between two nodes
+    already in one tree closes a loop, which adds up when the tie's gap equals the difference
+    the tree's path gives (loops of zero gaps are always found; a loop whose nonzero gaps add
+    up is found when the forest holds the rest of it)."""
+    if not scene.contacts:
+        return ""
+    edges = _contact_subgraph(scene, constraint_graph(scene))
+    tree: dict[int, list[tuple[int, float, int, str]]] = {}  # node -> (next, x_next − x, edge)
+    parent: dict[int, int] = {}
+
+    def root(node: int) -> int:
+        while parent.setdefault(node, node) != node:
+            node = parent[node]
+        return node
+
+    scale = max((abs(edge[2]) for edge in edges), default=0.0)
+    # the smallest gaps first: loops of zero gaps (the common way for rows to add up) are then
+    # closed within the forest of zero gaps, whatever other ties join the same nodes
+    for index in sorted(range(len(edges)), key=lambda i: abs(edges[i][2])):
+        a, b, weight = edges[index][:3]
+        if root(a) != root(b):
+            parent[root(a)] = root(b)
+            tree.setdefault(a, []).append((b, 1, index))  # a → b follows the edge
+            tree.setdefault(b, []).append((a, -1, index))
+            continue
+        path = _tree_path(tree, a, b)  # [(edge index, +1 along it / −1 against)]
+        if abs(sum(sign * edges[i][2] for i, sign in path) - weight) > 1e-12 * scale:
+            continue  # the loop's gaps do not add up: its rows never all hold at once
+        if all(sign < 0 for _, sign in path):
+            continue  # b → a along the path, then the edge a → b: one way round
+        names = ", ".join(edges[i][4] for i in [index] + [i for i, _ in path])
+        return (f"{names} hold their nodes at one position in more than one way, with no gap "
+                "to spare: the contact forces along that loop are not determined by rigid "
+                "contact (give one of them a gap, or hold the node by a support)")
+    return ""
+
+
+def _tree_path(tree: dict, start: int, goal: int) -> list[tuple[int, int]]:
+    """The edges of the forest ``tree`` from ``start`` to ``goal``, each with +1 where the path
+    follows the edge's direction and −1 where it goes against it."""
+    came: dict[int, tuple[int, int, int] | None] = {start: None}
+    queue = [start]
+    for node in queue:
+        for following, sign, index in tree.get(node, []):
+            if following not in came:
+                came[following] = (node, sign, index)
+                queue.append(following)
+    path, node = [], goal
+    while came[node] is not None:
+        before, sign, index = came[node]
+        path.append((index, sign))
+        node = before
+    return path[::-1]
+
+
+def tight_cycles(scene: Scene) -> tuple[tuple[int, ...], ...]:
+    """The contact rows of every cycle of zero total weight through a bar contact: rows that
+    can all hold at once and then fix their nodes twice, so that the rows alone cannot tell
+    how a force splits among them (a common force around the cycle moves nothing). Each is
+    found as a tight edge of the shortest-path tree closed by a path of tight edges."""
+    if not scene.contacts:
+        return ()
+    edges = _contact_subgraph(scene, constraint_graph(scene))
+    distance, _ = shortest_paths(edges)
+    slack = 1e-12 * max((abs(edge[2]) for edge in edges), default=0.0)
+    tight = [edge for edge in edges if edge[2] + distance[edge[0]] - distance[edge[1]] <= slack]
+    found: set[tuple[int, ...]] = set()
+    for closing in tight:
+        came: dict[int, tuple | None] = {closing[1]: None}
+        queue = [closing[1]]
+        for node in queue:
+            for edge in tight:
+                if edge[0] == node and edge[1] not in came:
+                    came[edge[1]] = edge
+                    queue.append(edge[1])
+        if closing[0] in came:
+            rows, node = [closing[3]], closing[0]
+            while came[node] is not None:
+                rows.append(came[node][3])
+                node = came[node][0]
+            if len(rows) > 1:
+                found.add(tuple(sorted(rows)))
+    return tuple(sorted(found))
+
+
+def shortest_paths(edges: list) -> tuple[dict[int, float], list]:
+    """Bellman–Ford from a virtual source joined to every vertex by weight 0 over edges
+    (from, to, weight, ...): (the distance of every vertex, []), or (…, the edges of a cycle of
+    negative total weight) when there is one."""
     vertices = sorted({v for a, b, *_ in edges for v in (a, b)})
     distance = dict.fromkeys(vertices, 0.0)
-    before: dict[int, tuple[int, int, float, str]] = {}
-    changed = None
+    before: dict[int, tuple] = {}
     for _ in range(len(vertices)):
         changed = None
         for edge in edges:
-            a, b, weight, _ = edge
+            a, b, weight = edge[:3]
             if distance[a] + weight < distance[b]:
                 distance[b] = distance[a] + weight
                 before[b] = edge
                 changed = b
         if changed is None:
-            return []
+            return distance, []
     node = changed
     for _ in range(len(vertices)):  # walk back into the cycle
         node = before[node][0]
@@ -705,7 +817,7 @@ def negative_cycle(edges: list[tuple[int, int, float, str]]) -> list[tuple[int, 
         cycle.append(edge)
         at = edge[0]
         if at == node:
-            return cycle[::-1]
+            return distance, cycle[::-1]
 
 
 def wall_at_every_node(scene: Scene, gap: Any, side: WallSide = "+", bar: int = 0) -> Scene:
@@ -1021,8 +1133,26 @@ def scene_to_toml(scene: Scene) -> str:
 
 
 __all__ = [
-    "AREA_RULES", "UNIT_SYSTEMS", "Bar", "BarContact", "DistributedLoad", "Load", "Scene",
-    "Support", "Units", "Wall", "circle_areas", "convert_units", "impossible_constraints",
-    "load_scene", "minimal", "needed_nodes", "scene_from_dict", "scene_to_toml",
-    "seed_scene", "wall_at_every_node",
+    "AREA_RULES",
+    "UNIT_SYSTEMS",
+    "Bar",
+    "BarContact",
+    "DistributedLoad",
+    "Load",
+    "Scene",
+    "Support",
+    "Units",
+    "Wall",
+    "circle_areas",
+    "constraint_graph",
+    "convert_units",
+    "impossible_constraints",
+    "load_scene",
+    "minimal",
+    "needed_nodes",
+    "scene_from_dict",
+    "scene_to_toml",
+    "seed_scene",
+    "tight_cycles",
+    "wall_at_every_node",
 ]

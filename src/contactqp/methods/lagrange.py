@@ -66,6 +66,66 @@ def solve_strain_saddle_point(model: Model, active: np.ndarray) -> tuple[np.ndar
     return x[:n], x[n + m:n + 2 * m], x[n + 2 * m:]
 
 
+def independent_rows(C: sp.csr_array, kept: np.ndarray, adding: np.ndarray,
+                     penetration: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """The active set ``kept`` plus the rows ``adding``, most penetrated first, kept
+    independent: the saddle-point system of rows that tie a node twice to its position
+    (walls on both sides of a clamped node, a wall and a bar contact to a held node, a loop of
+    walls and bar contacts) is singular. A row that would close such a loop replaces the
+    least loaded (``force``) row of the loop: with the others held, the new row is passed, so
+    the loop cannot hold as it was."""
+    active = kept.copy()
+    if adding.size == 0:
+        return active
+    adding = adding[np.argsort(-penetration[adding], kind="stable")]
+    entries = np.diff(C.indptr)
+    if not (entries[active] == 2).any() and not (entries[adding] == 2).any():
+        # walls alone: dependent exactly when two rows hold one node, which with the node
+        # passing a wall takes gaps that leave it no position (refused) or round-off
+        taken = np.zeros(C.shape[1], dtype=bool)
+        taken[C.indices[C.indptr[:-1][active & (entries == 1)]]] = True
+        nodes = C.indices[C.indptr[:-1][adding]]
+        first = np.zeros(adding.size, dtype=bool)
+        first[np.unique(nodes, return_index=True)[1]] = True
+        active[adding[first & ~taken[nodes]]] = True
+        return active
+    ground = C.shape[1]
+
+    def ends(row: int) -> tuple[int, int]:
+        nodes = C.indices[C.indptr[row]:C.indptr[row + 1]]
+        return int(nodes[0]), int(nodes[1]) if nodes.size == 2 else ground
+
+    for row in adding:
+        loop = _tie_loop([ends(r) + (r,) for r in np.flatnonzero(active)], *ends(int(row)))
+        if loop:
+            active[min(loop, key=lambda r: force[r])] = False
+        active[row] = True
+    return active
+
+
+def _tie_loop(ties: list[tuple[int, int, int]], start: int, goal: int) -> list[int]:
+    """The rows on the path of ``ties`` (node, node, row) from ``start`` to ``goal``, or []
+    when none joins them (breadth first)."""
+    neighbours: dict[int, list[tuple[int, int]]] = {}
+    for a, b, row in ties:
+        neighbours.setdefault(a, []).append((b, row))
+        neighbours.setdefault(b, []).append((a, row))
+    came: dict[int, tuple[int, int] | None] = {start: None}
+    queue = [start]
+    for node in queue:
+        for following, row in neighbours.get(node, []):
+            if following not in came:
+                came[following] = (node, row)
+                queue.append(following)
+    if goal not in came:
+        return []
+    path, node = [], goal
+    while came[node] is not None:
+        node, row = came[node]
+        path.append(row)
+    return path
+
+
 def solve_lagrange(model: Model, contact: str, *, max_iterations: int | None = None,
                    formulation: str = "full") -> Solution:
     """Lagrange multipliers; ``contact`` "equality" (every wall holds) or "inequality";
@@ -94,7 +154,8 @@ def solve_lagrange(model: Model, contact: str, *, max_iterations: int | None = N
         pen = C @ u - g
         disp_tol = displacement_tolerance(u, g, P, K)
         force_tol = DECISION_RTOL * max(np.abs(P).max(initial=0.0), np.abs(lam).max(initial=0.0))
-        return np.where(active, lam > -force_tol, pen > disp_tol)
+        kept = active & (lam > -force_tol)
+        return independent_rows(C, kept, np.flatnonzero(~active & (pen > disp_tol)), pen, lam)
 
     u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="lagrange",
                                          max_iterations=max_iterations)

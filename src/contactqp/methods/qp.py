@@ -45,6 +45,8 @@ import contextlib
 import importlib
 import io
 import math
+import os
+import sys
 import time
 from dataclasses import dataclass
 from functools import cached_property
@@ -521,15 +523,36 @@ class _Sink(io.TextIOBase):
 _SINK = _Sink()
 
 
+@contextlib.contextmanager
+def _silenced():
+    """Nothing written to standard output or error gets out: from Python (OSQP's "Polishing
+    not needed") nor from C (HiGHS's presolve notes on stderr), through file descriptors 1
+    and 2 (a few microseconds)."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        with contextlib.redirect_stdout(_SINK), contextlib.redirect_stderr(_SINK):
+            yield
+    finally:
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for handle in (*saved, null):
+            os.close(handle)
+
+
 def guarded(solve: Any, qp: QPProblem, *args: Any, verbose: bool = False) -> QPOutcome:
     """Call a backend's solve; anything the solver raises becomes a failed outcome (the Result
     check then flags it). The library's own errors (user mistakes) pass through. Whatever the
-    solver prints from Python goes nowhere unless ``verbose`` (OSQP prints "Polishing not
-    needed" with verbose=False); the backends also pass verbose to the solvers' own C code."""
+    solver prints goes nowhere unless ``verbose`` (:func:`_silenced`: OSQP prints "Polishing
+    not needed" and HiGHS presolve notes with their verbose flags off)."""
     try:
         if verbose:
             return solve(qp, *args)
-        with contextlib.redirect_stdout(_SINK), contextlib.redirect_stderr(_SINK):
+        with _silenced():
             return solve(qp, *args)
     except (KeyboardInterrupt, SystemExit, ContactqpError):
         raise
