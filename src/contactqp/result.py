@@ -234,11 +234,11 @@ def error_bounds(scene: Scene, u: np.ndarray, lam: np.ndarray, slots: np.ndarray
     else:
         held_rows = lam > tolerances.complementarity * F
         held = np.concatenate((scene.support_nodes, row_nodes[held_rows[rows]]))
-        s = row_stiffness(scene, np.unique(held))
+        s = row_stiffness(scene, np.unique(held), held_rows)
         stand_off = np.maximum(-pen, 0.0)
         pushing = lam > stand_off * s  # closing its gap is the smaller move
     held = np.unique(np.concatenate((scene.support_nodes, row_nodes[pushing[rows]])))
-    s, s_ends = row_stiffness(scene, held, ends=True)
+    s, s_ends = row_stiffness(scene, held, pushing, ends=True)
     delta = np.abs(pen) if equality else np.where(pushing, np.abs(pen), np.maximum(pen, 0.0))
     moved = np.where(pushing, 0.0, lam)  # an open row's force (or a pull) becomes a load
     n_loads = external.size - row_nodes.size - scene.support_nodes.size
@@ -419,15 +419,21 @@ def _closing(scene: Scene, moves: tuple[np.ndarray, np.ndarray], row_nodes: np.n
     return _largest(np.maximum(per_row - stand_off, 0.0) * np.where(np.isfinite(stand_off), s, 0.0))
 
 
-def row_stiffness(scene: Scene, held: np.ndarray,
+def row_stiffness(scene: Scene, held: np.ndarray, pushing: np.ndarray,
                   ends: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """The stiffness (N/m) each contact row sees with the supports and ``held`` nodes fixed:
-    a wall, its node's (:func:`seen_stiffness`); a bar contact, its two nodes' in series (a
-    supported end is rigid). With ``ends``, also the stiffness of each end (per nonzero of
-    :attr:`Scene.contact_rows`)."""
+    a wall, its node's (:func:`seen_stiffness`); a bar contact, its two nodes' in series (an
+    end held by a support or by a ``pushing`` wall is rigid: only the other end moves; both
+    held, neither counts as rigid). With
+    ``ends``, also the stiffness of each end (per nonzero of :attr:`Scene.contact_rows`)."""
     rows, row_nodes, _, gaps = scene.contact_rows
     node_stiffness = seen_stiffness(scene, held, row_nodes)
-    node_stiffness[np.isin(row_nodes, scene.support_nodes)] = np.inf
+    n_walls = len(scene.walls)
+    rigid = np.concatenate((scene.support_nodes, row_nodes[:n_walls][pushing[:n_walls]]))
+    fixed = (rows >= n_walls) & np.isin(row_nodes, rigid)
+    # both ends held: the contact closes only as a wall gives, at that end's own stiffness
+    fixed &= np.bincount(rows[fixed], minlength=gaps.size)[rows] < 2
+    node_stiffness[fixed] = np.inf
     with np.errstate(divide="ignore"):
         row = 1.0 / np.bincount(rows, 1.0 / node_stiffness, minlength=gaps.size)
     return (row, node_stiffness) if ends else row
