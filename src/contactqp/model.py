@@ -344,6 +344,34 @@ def elongation_rows(model: Model) -> sp.csr_array:
                         shape=(n_elements, model.n_free))
 
 
+def without_circulation(model: Model, contact_force: np.ndarray) -> np.ndarray:
+    """Contact forces (N) with the part taken out that rows holding a node at one position
+    both ways would carry round and round: walls on both sides of a node whose gaps sum to 0
+    (a clamped node), and the one-way loops of walls and bar contacts whose gaps add up
+    (:attr:`Scene.tight_cycles`). Such a common part moves nothing, so the rows alone leave
+    it open; the exact answer has none (contactqp.result)."""
+    lam = np.array(contact_force, dtype=float)
+    C = model.C
+    single = np.flatnonzero(np.diff(C.indptr) == 1)
+    if single.size:
+        column, sign = C.indices[C.indptr[single]], C.data[C.indptr[single]]
+        plus = np.full(C.shape[1], -1)
+        minus = np.full(C.shape[1], -1)
+        plus[column[sign > 0]] = single[sign > 0]
+        minus[column[sign < 0]] = single[sign < 0]
+        both = (plus >= 0) & (minus >= 0)
+        p, m = plus[both], minus[both]
+        clamped = model.g[p] + model.g[m] == 0.0
+        p, m = p[clamped], m[clamped]
+        common = np.maximum(np.minimum(lam[p], lam[m]), 0.0)
+        lam[p] -= common
+        lam[m] -= common
+    for cycle in model.scene.tight_cycles:
+        rows = list(cycle)
+        lam[rows] -= max(float(lam[rows].min()), 0.0)
+    return lam
+
+
 EXACT_WALL_STIFFNESS_LIMIT = 64  # wall nodes up to which wall_stiffness solves for S exactly
 
 

@@ -23,7 +23,7 @@ from contactqp.methods._active_set import (
     positive_number,
 )
 from contactqp.methods.penalty import penalty_value
-from contactqp.model import Model, wall_stiffness
+from contactqp.model import Model, wall_stiffness, without_circulation
 from contactqp.result import Solution
 
 PENALTY_PER_STIFFNESS = 100.0  # default ε: this many times the stiffness the walls see
@@ -87,6 +87,7 @@ def solve_augmented(model: Model, contact: str, *, penalty: float | None = None,
         converged = change <= tolerance * scale
         if converged or (change >= previous and iteration > 2):
             status = "solved" if converged else "stalled at round-off"
+            lam = without_circulation(model, lam) if unilateral else lam
             return Solution(u, lam, solver="augmented", iterations=iteration, status=status,
                             info={"penalty": eps, "inner_solves": inner_solves})
         previous = change
