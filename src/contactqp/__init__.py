@@ -1,8 +1,12 @@
 """contactqp: contact mechanics of elastic bars written as constrained optimisation.
 
-Scene → model (K, P, C, g) → method → checked Result. See the README for the conventions.
+scene → model (K, P, C, g) → method → checked Result. See the README for the conventions and
+the architecture. Importing contactqp loads no QP solver and no matplotlib: a backend is
+imported when it is first used, matplotlib when a chart is drawn.
 """
 
+from contactqp.builders import convert_units, default_scene, minimal, wall_at_every_node
+from contactqp.check import GUARANTEE, TOLERANCES, Tolerances, check
 from contactqp.curve import LoadPath, first_contact_factor, load_path
 from contactqp.errors import (
     ContactqpError,
@@ -11,10 +15,10 @@ from contactqp.errors import (
     SolverError,
     SolverNotAvailable,
 )
-from contactqp.methods import CONTACT_KINDS, METHODS, solve
+from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.qp import QPProblem, available_qp_solvers, qp_problem
-from contactqp.model import Model, build_model
-from contactqp.result import GUARANTEE, TOLERANCES, Result, Tolerances, check
+from contactqp.model import Layout, Model, build_model
+from contactqp.result import Result
 from contactqp.scene import (
     UNIT_SYSTEMS,
     Bar,
@@ -25,23 +29,18 @@ from contactqp.scene import (
     Support,
     Units,
     Wall,
-    convert_units,
-    load_scene,
-    minimal,
-    scene_from_dict,
-    scene_to_toml,
-    seed_scene,
-    wall_at_every_node,
 )
+from contactqp.scene_io import load_scene, scene_from_dict, scene_to_toml
+from contactqp.solve import solve
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "CONTACT_KINDS", "GUARANTEE", "METHODS", "TOLERANCES", "UNIT_SYSTEMS", "Bar", "BarContact",
-    "ContactqpError",
-    "DistributedLoad", "Load", "LoadPath", "Model", "OptionError", "QPProblem", "Result", "Scene",
-    "SceneError", "SolverError", "SolverNotAvailable", "Support", "Tolerances", "Units", "Wall",
-    "__version__", "available_qp_solvers", "build_model", "check", "convert_units", "first_contact_factor",
-    "load_path", "load_scene", "minimal", "qp_problem", "scene_from_dict", "scene_to_toml",
-    "seed_scene", "solve", "wall_at_every_node",
+    "CONTACT_KINDS", "FORMULATIONS", "GUARANTEE", "METHODS", "TOLERANCES", "UNIT_SYSTEMS", "Bar",
+    "BarContact", "ContactqpError", "DistributedLoad", "Layout", "Load", "LoadPath", "Model",
+    "OptionError", "QPProblem", "Result", "Scene", "SceneError", "SolverError",
+    "SolverNotAvailable", "Support", "Tolerances", "Units", "Wall", "__version__",
+    "available_qp_solvers", "build_model", "check", "convert_units", "default_scene",
+    "first_contact_factor", "load_path", "load_scene", "minimal", "qp_problem",
+    "scene_from_dict", "scene_to_toml", "solve", "wall_at_every_node",
 ]

@@ -19,9 +19,10 @@ from typing import Any
 import numpy as np
 
 from contactqp.errors import ContactqpError
-from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS, solve
+from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.result import Result
-from contactqp.scene import Scene, load_scene, seed_scene
+from contactqp.scene import Scene
+from contactqp.solve import as_scene, solve
 from contactqp.studies import PenaltySweep, Run, compare, mesh_convergence, penalty_sweep
 
 DEFAULT_OUT = "contactqp-out"
@@ -37,7 +38,7 @@ STUDY_EXIT = ("exit status 0 when the table is produced, even where some runs fa
 
 
 def _scene(path: str | None) -> Scene:
-    return seed_scene() if path is None else load_scene(path)
+    return as_scene(path)
 
 
 def _values(values: np.ndarray, digits: int) -> str:
@@ -51,7 +52,7 @@ def _largest_residual(result: Result) -> float:
 def table(runs: list[Run]) -> str:
     """The comparison table: one row per method and contact kind, in the scene's units."""
     scene = next((run.result.scene for run in runs if run.result is not None), None)
-    unit = (scene or seed_scene()).unit
+    unit = (scene or as_scene(None)).unit
     header = ("method", "contact", f"contact force ({unit.force})",
               f"penetration ({unit.length})", f"support reaction ({unit.force})",
               "residual", "verified", "time (ms)")
@@ -147,23 +148,7 @@ def command_penalty_sweep(args: argparse.Namespace) -> int:
     scene = _scene(args.scene)
     sweep = penalty_sweep(scene, contact=args.contact)
     if args.json:
-        print(json.dumps({
-            "penalty": sweep.penalties.tolist(),
-            "contact_force": [None if r.result is None else r.result.to_dict()["contact_force"]
-                              for r in sweep.runs],
-            "penetration": [None if r.result is None else r.result.to_dict()["penetration"]
-                            for r in sweep.runs],
-            "force_error": [v if np.isfinite(v) else None for v in sweep.force_error.tolist()],
-            "verified": [r.result is not None and r.result.verified for r in sweep.runs],
-            "reference_contact_force": sweep.reference.contact_force.tolist(),
-            "converged_up_to": float(sweep.penalties[sweep.best]),
-            "augmented_force_error": [v if np.isfinite(v) else None
-                                      for v in sweep.augmented_error.tolist()],
-            "augmented_iterations": sweep.augmented_iterations.tolist(),
-            "augmented_verified": [r.result is not None and r.result.verified
-                                   for r in sweep.augmented_runs],
-            "units": scene.units,
-        }, indent=2))
+        print(json.dumps(sweep.to_dict(), indent=2, allow_nan=False))
         return OK
     unit = scene.unit
     print(f"penalty sweep, {scene.name}, {args.contact} contact; Lagrange contact force "

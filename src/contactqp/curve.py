@@ -1,7 +1,7 @@
 """Load stepping: the force–displacement curve of a scene, per method.
 
 :func:`load_path` scales every load (point and distributed) by factors from 0 to 1 and records,
-per method, the displacement of the load point (:meth:`Scene.load_point`), the contact forces
+per method, the displacement of the load point (:meth:`Layout.load_point`), the contact forces
 and the penetrations, each step a checked Result. Nothing is rebuilt per step that does not
 change with the loads:
 
@@ -25,10 +25,20 @@ from typing import Any
 import numpy as np
 
 from contactqp.errors import OptionError
-from contactqp.methods import METHODS, solve, validate
-from contactqp.model import CONDENSE_LIMIT, Condensed, Model, build_model, condense, wall_stiffness
-from contactqp.result import Result, make_result
-from contactqp.scene import Scene, seed_scene
+from contactqp.methods import checked_options
+from contactqp.model import (
+    CONDENSE_LIMIT,
+    Condensed,
+    Layout,
+    Model,
+    build_model,
+    condense,
+    wall_stiffness,
+)
+from contactqp.result import Result, make_result, plain
+from contactqp.scene import Scene
+from contactqp.solve import as_scene, solve, solve_model
+from contactqp.values import whole_number
 
 # name -> (method, contact, options): unilateral contact, the textbook equality (which pulls
 # before the wall is reached), the penalty, the augmented Lagrangian and a cvxpy QP; and
@@ -81,8 +91,6 @@ class LoadPath:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form of ``contactqp curve --json``."""
-        def plain(a: np.ndarray) -> list:
-            return np.where(np.isfinite(a), a, np.nan).tolist()
         return {
             "scene": self.scene.name, "load_node": self.load_node,
             "load_factor": self.load_factor.tolist(),
@@ -99,16 +107,15 @@ def first_contact_factor(scene: Scene) -> float:
     """The load factor at which the first contact closes under the scene's loads, from the
     contact-free answer t·K⁻¹P: min over rows with (C K⁻¹ P)ᵢ > 0 of gᵢ / (C K⁻¹ P)ᵢ
     (inf when no load closes a contact)."""
-    model = build_model(scene)
-    closing = model.C @ model.solve_K(model.P)
+    model = build_model(as_scene(scene))
+    closing = model.C @ model.free_displacement
     reached = closing > 0.0
     return float(np.min(model.g[reached] / closing[reached], initial=np.inf))
 
 
 def _factors(steps: Any) -> np.ndarray:
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 2:
-        raise OptionError(f"steps must be a whole number >= 2 (0 and 1 included), got {steps!r}")
-    return np.linspace(0.0, 1.0, int(steps))
+    steps = whole_number("steps (0 and 1 included)", steps, 2, error=OptionError)
+    return np.linspace(0.0, 1.0, steps)
 
 
 def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
@@ -116,15 +123,15 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
     """The force–displacement curve of ``scene`` (default scene when None) at ``steps`` load
     factors from 0 to 1, for each of ``methods`` (name -> (method, contact, options); default
     :func:`curve_methods`)."""
-    scene = seed_scene() if scene is None else scene
+    scene = as_scene(scene)
     factors = _factors(steps)
     model = build_model(scene)
     methods = curve_methods(model) if methods is None else methods
-    node = scene.load_point()
+    node = model.layout.load_point()
     condensed = None  # factored on first use, then shared by every explicit method
     paths = {}
     for name, (method, contact, options) in methods.items():
-        validate(method, contact, options)
+        checked_options(method, contact, "full", options)
         if method in ("lagrange", "penalty", "augmented"):
             if condensed is None and np.unique(model.C.indices).size <= CONDENSE_LIMIT:
                 start = time.perf_counter()
@@ -145,25 +152,23 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
 def _stepped(model: Model, condensed: tuple[Condensed, float] | None, factors: np.ndarray,
              method: str, contact: str, options: dict[str, Any]) -> list[Result]:
     """One explicit method along the load factors on the model's factorisation ``condensed``
-    (the Condensed model and the time it took); None: a full solve per step."""
+    (the Condensed problem and the time it took); None: a full solve per step."""
     scene = model.scene
     if condensed is None:
         return [solve(scene.scaled_loads(t), method, contact, **options) for t in factors]
     factored, factor_time = condensed
-    function = METHODS[method]
+    spec, checked = checked_options(method, contact, "condensed", options)
     results = []
     for t in factors:
         start = time.perf_counter()
         # the loads scale the free displacements t·K⁻¹P and the condensed load alike
-        scaled_condensed = replace(factored, u0=t * factored.u0,
-                                   model=replace(factored.model, P=t * factored.model.P))
-        step = function(scaled_condensed.model, contact, **options)
-        u_free = scaled_condensed.displacements(step.contact_force)
+        step = factored.scaled(t)
+        solution = solve_model(step.full, spec, contact, "condensed", checked, condensed=step)
         solved = time.perf_counter()
-        scaled = replace(model, scene=scene.scaled_loads(t), P=t * model.P)
-        scaled.__dict__["free_displacement"] = scaled_condensed.u0  # K⁻¹P, for the check
+        scaled = replace(model, layout=Layout(scene.scaled_loads(t)), P=t * model.P)
+        scaled.__dict__["free_displacement"] = step.u0  # K⁻¹P, for the check
         results.append(make_result(
-            scaled, replace(step, u_free=u_free), method=method, contact=contact,
+            scaled, solution, method=method, contact=contact,
             options={**options, "formulation": "condensed", "load_factor": float(t)},
             timings={"build": factor_time if t == factors[0] else 0.0, "solve": solved - start},
         ))

@@ -21,13 +21,13 @@ def plot_bar(result: Result, ax: Axes | None = None, magnification: float | None
     """The undeformed bar (grey) and the deformed one (blue), displacements magnified, with the
     walls at their gaps (same magnification) and the supports."""
     ax = _axes(ax)
-    scene = result.scene
-    x = scene.node_x  # the bars end to end
-    first = np.delete(np.arange(scene.n_nodes - 1), scene.junctions)  # each element's first node
+    scene, layout = result.scene, result.layout
+    x = layout.node_x  # the bars end to end
+    first = np.delete(np.arange(layout.n_nodes - 1), layout.junctions)  # each element's first node
     largest = max(float(np.abs(result.u).max()), max((w.gap for w in result.scene.walls), default=0))
     if magnification is None:
         magnification = 0.1 * x[-1] / largest if largest > 0 else 1.0
-    half = np.sqrt(scene.areas / np.pi)  # radius of the equivalent circle
+    half = np.sqrt(layout.areas / np.pi)  # radius of the equivalent circle
     depth = 2.5 * half.max()
     for row, (nodes, colour, name) in enumerate(
         ((x, "0.75", "undeformed"), (x + magnification * result.u, "tab:blue", "deformed"))
@@ -40,13 +40,13 @@ def plot_bar(result: Result, ax: Axes | None = None, magnification: float | None
         ax.plot(nodes, np.full(nodes.size, y), "k.", markersize=4)
     top, bottom = half.max() * 1.3, -depth - half.max() * 1.3
     for i, wall in enumerate(result.scene.walls):
-        at = x[scene.global_node(wall.bar, wall.node)] + wall.sign * magnification * wall.gap
+        at = x[layout.node(wall.bar, wall.node)] + wall.sign * magnification * wall.gap
         ax.plot([at, at], [bottom, top], color="tab:red", linewidth=2.5,
                 label="wall" if i == 0 else None)
         ax.annotate(f"{result.contact_force[i]:.4g} N", (at, top), color="tab:red",
                     ha="left" if wall.side == "+" else "right", va="bottom", fontsize=8)
     for s in result.scene.supports:
-        ax.plot([x[scene.global_node(s.bar, s.node)]] * 2, [bottom, top], color="k", linewidth=4,
+        ax.plot([x[layout.node(s.bar, s.node)]] * 2, [bottom, top], color="k", linewidth=4,
                 label="support" if s is result.scene.supports[0] else None)
     ax.set_xlim(x[0] - 0.05 * x[-1], x[-1] * 1.05 + magnification * largest)
     ax.set_ylim(bottom * 1.2, top * 1.6)

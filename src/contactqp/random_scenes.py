@@ -78,14 +78,14 @@ def _draw(rng: np.random.Generator, max_bars: int, max_elements: int, contacts: 
         b = int(rng.integers(0, len(bars)))
         loads.append(Load(bars[b].n_nodes - 1 if Support(bars[b].n_nodes - 1, b) not in supports
                           else 0, 1e4, b))
-    loaded = Scene(bars if len(bars) > 1 else bars[0], tuple(supports), tuple(loads),
-                   distributed=tuple(distributed))
-    scale = max(float(np.abs(build_model(loaded).free_displacement).max(initial=0.0)), 1e-9)
-    held_nodes = set(loaded.support_nodes.tolist())
+    loaded = Scene(bars, tuple(supports), tuple(loads), distributed=tuple(distributed))
+    model = build_model(loaded)
+    scale = max(float(np.abs(model.free_displacement).max(initial=0.0)), 1e-9)
+    held_nodes = set(model.layout.support_nodes.tolist())
     walls = []
     for b, bar in enumerate(bars):
         for node in range(bar.n_nodes):
-            if loaded.global_node(b, node) in held_nodes or rng.random() < 0.5:
+            if model.layout.node(b, node) in held_nodes or rng.random() < 0.5:
                 continue
             sides = ("+",) if rng.random() < 0.4 else ("-",) if rng.random() < 0.5 else ("+", "-")
             gaps = [_gap(rng, scale) for _ in sides]
@@ -100,7 +100,7 @@ def _draw(rng: np.random.Generator, max_bars: int, max_elements: int, contacts: 
             if any((c.bar_a, c.node_a, c.bar_b, c.node_b) == (a, node_a, b, node_b) for c in between):
                 continue
             between.append(BarContact(a, node_a, b, node_b, _gap(rng, scale, press_fit=False)))
-    return Scene(loaded.bar, loaded.supports, loaded.loads, tuple(walls),
+    return Scene(loaded.bars, loaded.supports, loaded.loads, tuple(walls),
                  distributed=loaded.distributed, contacts=tuple(between))
 
 

@@ -6,20 +6,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from contactqp.builders import (
+    DEFAULT_DIAMETERS,
+    DEFAULT_GAP,
+    DEFAULT_LENGTH,
+    DEFAULT_LOAD,
+    DEFAULT_MODULUS,
+    default_scene,
+)
 from contactqp.errors import ContactqpError
-from contactqp.methods import CONTACT_KINDS, solve
+from contactqp.methods import CONTACT_KINDS
 from contactqp.methods.penalty import TEXTBOOK_PENALTY
 from contactqp.methods.qp import available_qp_solvers
-from contactqp.result import Result
-from contactqp.scene import (
-    SEED_DIAMETERS,
-    SEED_GAP,
-    SEED_LENGTH,
-    SEED_LOAD,
-    SEED_MODULUS,
-    Scene,
-    seed_scene,
-)
+from contactqp.result import Result, plain
+from contactqp.scene import Scene
+from contactqp.solve import as_scene, solve
 
 SWEEP_PENALTIES = (1.0,) + tuple(10.0 ** k for k in range(5, 21))  # N/m: 1, 1e5, 1e6 … 1e20
 
@@ -62,7 +63,7 @@ def run_label(method: str, options: dict) -> str:
 
 def compare(scene: Scene | None = None, contacts: tuple[str, ...] = CONTACT_KINDS) -> list[Run]:
     """Solve ``scene`` by every method (and every installed QP solver) for each contact kind."""
-    scene = seed_scene() if scene is None else scene
+    scene = as_scene(scene)
     rows = []
     for contact in contacts:
         for method, options in method_runs(scene):
@@ -93,6 +94,25 @@ class PenaltySweep:
     augmented_runs: tuple[Run, ...]
     augmented_error: np.ndarray
     augmented_iterations: np.ndarray
+
+    def to_dict(self) -> dict:
+        """The JSON form of ``contactqp penalty-sweep --json``."""
+        def forces(runs: tuple[Run, ...], key: str) -> list:
+            return [None if r.result is None else getattr(r.result, key) for r in runs]
+
+        return plain({
+            "penalty": self.penalties, "units": self.reference.scene.units,
+            "contact_force": forces(self.runs, "contact_force"),
+            "penetration": forces(self.runs, "penetration"),
+            "force_error": self.force_error,
+            "verified": [r.result is not None and r.result.verified for r in self.runs],
+            "reference_contact_force": self.reference.contact_force,
+            "converged_up_to": self.penalties[self.best],
+            "augmented_force_error": self.augmented_error,
+            "augmented_iterations": self.augmented_iterations,
+            "augmented_verified": [r.result is not None and r.result.verified
+                                   for r in self.augmented_runs],
+        })
 
     def summary(self) -> str:
         if not np.any(np.isfinite(self.force_error)):
@@ -138,7 +158,7 @@ def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | Non
     """Penetration and contact force of the penalty method (and of the augmented Lagrangian
     method with the same ε) for each ε in ``penalties`` (force per length in the scene's
     units; default :func:`sweep_penalties`, 1 and 1e5 … 1e20 N/m)."""
-    scene = seed_scene() if scene is None else scene
+    scene = as_scene(scene)
     penalties = sweep_penalties(scene) if penalties is None else tuple(penalties)
     reference = solve(scene, "lagrange", contact)
     runs, errors = _sweep_runs(scene, "penalty", penalties, contact, reference)
@@ -151,20 +171,20 @@ def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | Non
                         augmented, augmented_errors, iterations)
 
 
-def cone_flexibility(a: float, b: float) -> float:
+def cone_compliance(a: float, b: float) -> float:
     """∫ₐᵇ dx / (E·A(x)) of the default scene's conical bar (m/N): 4(b − a)/(E·π·d(a)·d(b))."""
-    d0, d1 = SEED_DIAMETERS
+    d0, d1 = DEFAULT_DIAMETERS
 
     def diameter(x: float) -> float:
-        return d0 + (d1 - d0) * x / SEED_LENGTH
+        return d0 + (d1 - d0) * x / DEFAULT_LENGTH
 
-    return 4.0 * (b - a) / (SEED_MODULUS * np.pi * diameter(a) * diameter(b))
+    return 4.0 * (b - a) / (DEFAULT_MODULUS * np.pi * diameter(a) * diameter(b))
 
 
 def cone_contact_force() -> float:
     """The continuum contact force of the default scene (N): λ = (F·f(0, L/2) − g) / f(0, L)."""
-    free_tip = SEED_LOAD * cone_flexibility(0.0, SEED_LENGTH / 2)
-    return (free_tip - SEED_GAP) / cone_flexibility(0.0, SEED_LENGTH)
+    free_tip = DEFAULT_LOAD * cone_compliance(0.0, DEFAULT_LENGTH / 2)
+    return (free_tip - DEFAULT_GAP) / cone_compliance(0.0, DEFAULT_LENGTH)
 
 
 @dataclass(frozen=True)
@@ -181,7 +201,7 @@ def mesh_convergence(elements: tuple[int, ...] = (2, 4, 8, 16, 32, 64, 128, 256,
     """Solve the default scene on finer and finer meshes with both area rules."""
     exact = cone_contact_force()
     errors = {
-        rule: np.array([abs(solve(seed_scene(n, rule)).contact_force[0] - exact) / exact
+        rule: np.array([abs(solve(default_scene(n, rule)).contact_force[0] - exact) / exact
                         for n in elements])
         for rule in ("midpoint", "exact")
     }

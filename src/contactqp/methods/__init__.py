@@ -1,184 +1,117 @@
-"""Every way of solving a scene, behind one function: ``solve(scene, method, contact, **options)``.
+"""Every way of solving a contact problem, and their registry.
 
-Each method is a function ``(model, contact, **options) -> Solution``; :func:`solve` builds the
-model, times the method, and turns its Solution into a checked Result.
+A method is a function ``(problem, contact, **options) -> Solution``: ``problem`` a
+:class:`~contactqp.model.Model` or a :class:`~contactqp.model.Condensed` one (K, P, C, g),
+``contact`` "inequality" or "equality". :data:`METHODS` names each method's options, with the
+check each value must pass, and the formulations it solves; :func:`checked_options` applies
+them, so that the methods themselves take their options as given. The pipeline that builds the
+problem and checks the answer is :mod:`contactqp.solve`.
 """
 
 from __future__ import annotations
 
-import functools
-import inspect
-import os
-import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from contactqp.errors import OptionError
-from contactqp.methods.augmented import solve_augmented
+from contactqp.methods.augmented import DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, solve_augmented
 from contactqp.methods.lagrange import solve_lagrange
 from contactqp.methods.penalty import solve_penalty
-from contactqp.methods.qp import solve_qp
-from contactqp.model import CONTACT_KINDS, build_model, condense, contact_kind
-from contactqp.result import Result, Solution, make_result
-from contactqp.scene import Scene, load_scene, seed_scene
+from contactqp.methods.qp import BACKENDS, solve_qp
+from contactqp.methods.qp.settings import ACCURACIES
+from contactqp.result import Solution
+from contactqp.values import flag, positive_number, whole_number
 
+CONTACT_KINDS = ("inequality", "equality")  # the contact rows as C u <= g, or as C u = g
 FORMULATIONS = ("full", "condensed", "strain")
 
-METHODS: dict[str, Callable[..., Solution]] = {
-    "lagrange": solve_lagrange,
-    "penalty": solve_penalty,
-    "augmented": solve_augmented,
-    "qp": solve_qp,
+
+def _or_none(check: Callable[[Any], Any]) -> Callable[[Any], Any]:
+    return lambda value: None if value is None else check(value)
+
+
+def _choice(name: str, choices: tuple[str, ...]) -> Callable[[Any], str]:
+    def check(value: Any) -> str:
+        if not isinstance(value, str) or value not in choices:
+            raise OptionError(f"{name} must be one of {', '.join(choices)}; got {value!r}")
+        return value
+    return check
+
+
+def _text(name: str) -> Callable[[Any], str]:
+    def check(value: Any) -> str:
+        if not isinstance(value, str):
+            raise OptionError(f"{name} must be a name (text), got {value!r}")
+        return value
+    return check
+
+
+ITERATIONS = _or_none(lambda v: whole_number("max_iterations", v, 1, error=OptionError))
+PENALTY = _or_none(lambda v: positive_number("penalty", v, "force per length, e.g. N/m",
+                                             OptionError))
+
+
+@dataclass(frozen=True)
+class Method:
+    """A method: its name, its function, its options (name -> the check its value must pass,
+    returning the value to use), the formulations it solves and one line on what it does."""
+
+    name: str
+    solve: Callable[..., Solution]
+    options: dict[str, Callable[[Any], Any]]
+    formulations: tuple[str, ...]
+    summary: str
+
+
+METHODS: dict[str, Method] = {
+    "lagrange": Method("lagrange", solve_lagrange, {"max_iterations": ITERATIONS}, FORMULATIONS,
+                       "the saddle-point system [[K, Cᵀ], [C, 0]], an active-set loop"),
+    "penalty": Method("penalty", solve_penalty, {"penalty": PENALTY, "max_iterations": ITERATIONS},
+                      ("full", "condensed"), "K + ε CᵀC, the penalty on the walls passed"),
+    "augmented": Method(
+        "augmented", solve_augmented,
+        {"penalty": PENALTY,
+         "tolerance": lambda v: positive_number("tolerance", v, "relative change of λ",
+                                                OptionError),
+         "max_iterations": lambda v: whole_number("max_iterations", v, 1, error=OptionError)},
+        ("full", "condensed"), "the augmented Lagrangian (Uzawa) with a moderate penalty"),
+    "qp": Method(
+        "qp", solve_qp,
+        {"backend": _choice("backend", tuple(BACKENDS)), "solver": _or_none(_text("solver")),
+         "accuracy": _choice("accuracy", ACCURACIES),
+         "scale": lambda v: flag("scale", v, OptionError),
+         "verbose": lambda v: flag("verbose", v, OptionError)},
+        FORMULATIONS, "a QP solver, whose dual values are the contact forces"),
 }
 
 
-@functools.cache
-def method_options(method: str) -> tuple[str, ...]:
-    """The keyword options a method takes (``formulation`` is :func:`solve`'s own argument)."""
-    parameters = inspect.signature(METHODS[method]).parameters.values()
-    return tuple(p.name for p in parameters
-                 if p.kind is inspect.Parameter.KEYWORD_ONLY and p.name != "formulation")
-
-
-def takes_strain(method: str) -> bool:
-    """Whether a method solves the strain formulation (it needs exact equality rows)."""
-    return "formulation" in inspect.signature(METHODS[method]).parameters
-
-
-def validate(method: str, contact: str, options: dict[str, Any]) -> Callable[..., Solution]:
-    """The function of ``method``, after checking it, ``contact`` and ``options`` (OptionError)."""
+def checked_options(method: Any, contact: Any, formulation: Any,
+                    options: dict[str, Any]) -> tuple[Method, dict[str, Any]]:
+    """The method named ``method`` and its ``options`` checked, after checking ``contact``
+    and ``formulation`` too (an OptionError names what is wrong)."""
     if not isinstance(method, str) or method not in METHODS:
         raise OptionError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
-    contact_kind(contact)
-    allowed = method_options(method)
-    for name in options:
-        if name not in allowed:
-            raise OptionError(
-                f"method {method!r} has no option {name!r} (its options: {', '.join(allowed)})"
-            )
-    return METHODS[method]
-
-
-def check_equality_is_possible(scene: Scene) -> None:
-    """Equality contact ties every contact row: a support or one wall fixes a node, a bar
-    contact ties two nodes. Two ties between the same nodes (walls on both sides of one node,
-    two walls on nodes a bar contact ties, a loop of bar contacts) over-determine them: the
-    saddle-point system is singular. An OptionError names the ties that close the loop."""
-    parent: dict[int, int] = {}
-
-    def root(node: int) -> int:
-        while parent.get(node, node) != node:
-            node = parent[node]
-        return node
-
-    ties: list[tuple[int, int, str]] = []  # accepted ties: (node, node, name); -1 is "held"
-    supports = set(scene.support_nodes.tolist())
-    rows = [(-1, scene.global_node(w.bar, w.node), f"wall[{i}] (node {w.node})")
-            for i, w in enumerate(scene.walls)]
-    rows += [(scene.global_node(c.bar_a, c.node_a), scene.global_node(c.bar_b, c.node_b),
-              f"contact[{i}]") for i, c in enumerate(scene.contacts)]
-    for a, b, name in rows:
-        a, b = (-1 if a in supports else a), (-1 if b in supports else b)
-        if root(a) == root(b):
-            loop = _tie_path(ties, a, b)
-            raise OptionError(
-                f"contact='equality' cannot hold {name} together with {', '.join(loop)}: they "
-                "fix the same nodes twice; use contact='inequality'"
-            )
-        parent[root(a)] = root(b)
-        ties.append((a, b, name))
-
-
-def _tie_path(ties: list[tuple[int, int, str]], start: int, goal: int) -> list[str]:
-    """The names of the ties on the path from ``start`` to ``goal`` (breadth first)."""
-    neighbours: dict[int, list[tuple[int, str]]] = {}
-    for a, b, name in ties:
-        neighbours.setdefault(a, []).append((b, name))
-        neighbours.setdefault(b, []).append((a, name))
-    came: dict[int, tuple[int, str] | None] = {start: None}
-    queue = [start]
-    for node in queue:
-        for following, name in neighbours.get(node, []):
-            if following not in came:
-                came[following] = (node, name)
-                queue.append(following)
-    path, node = [], goal
-    while came.get(node) is not None:
-        node, name = came[node]
-        path.append(name)
-    return path[::-1] or ["a support"]
-
-
-def as_scene(scene: Scene | str | os.PathLike | None) -> Scene:
-    """The scene to solve: the default scene for None, a scene file read for a path."""
-    if scene is None:
-        return seed_scene()
-    if isinstance(scene, (str, os.PathLike)):
-        return load_scene(scene)
-    if not isinstance(scene, Scene):
-        raise OptionError(f"scene must be a contactqp.Scene, a scene file's path or None, "
-                          f"got {type(scene).__name__}")
-    return scene
-
-
-def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrange", contact: str = "inequality",
-          formulation: str = "full", **options: Any) -> Result:
-    """Solve a scene (the default scene when None) by ``method`` with ``contact``
-    "inequality" (unilateral, the default) or "equality" (the textbook form).
-
-    ``scene``: a Scene, the path of a scene file (read by :func:`contactqp.load_scene`), or
-    None for the default scene.
-
-    Methods and their options: "lagrange" (max_iterations), "penalty" (penalty ε, force per
-    length in the scene's units, default 1e8 × the stiffness the walls see; max_iterations),
-    "augmented" (penalty, default 100 × the stiffness the walls see; tolerance, default
-    1e-10; max_iterations), "qp" (backend "clarabel" (default), "osqp", "cvxpy" or
-    "qpsolvers"; solver, None for the backend's default; accuracy "default" or "high"; scale,
-    default True; verbose, default False: see :mod:`contactqp.methods.qp`).
-
-    ``formulation``: "full" (every free node an unknown), "condensed" (K factored once, the
-    method sees only the nodes that carry walls, every displacement recovered from the same
-    factorisation; see :func:`contactqp.model.condense`) or "strain" (lagrange and qp only:
-    the element elongations are unknowns too, tied to the displacements by equality rows
-    whose multipliers are the element forces; see :func:`contactqp.model.elongation_rows`).
-    Returns a checked :class:`Result`.
-    """
-    scene = as_scene(scene)
-    function = validate(method, contact, options)
-    if formulation not in FORMULATIONS:
+    if not isinstance(contact, str) or contact not in CONTACT_KINDS:
+        raise OptionError(f"contact must be one of {', '.join(CONTACT_KINDS)}; got {contact!r}")
+    if not isinstance(formulation, str) or formulation not in FORMULATIONS:
         raise OptionError(f"formulation must be one of {', '.join(FORMULATIONS)}; "
                           f"got {formulation!r}")
-    if formulation == "strain" and not takes_strain(method):
+    spec = METHODS[method]
+    if formulation not in spec.formulations:
+        takes = [name for name, m in METHODS.items() if formulation in m.formulations]
         raise OptionError(
-            f"formulation='strain' is solved by the methods "
-            f"{', '.join(m for m in METHODS if takes_strain(m))}, not {method!r}: its tie rows "
-            f"must hold exactly, and {method!r} enforces rows by a penalty"
-        )
-    if contact == "equality":
-        check_equality_is_possible(scene)
-    start = time.perf_counter()
-    model = build_model(scene)
-    built = time.perf_counter()
-    if formulation == "condensed":
-        condensed = condense(model)
-        if condensed.model.n_free:
-            solution = function(condensed.model, contact, **options)
-        else:  # no contacts: nothing left to solve, u = K⁻¹P
-            solution = Solution(np.zeros(0), np.zeros(0), solver=method,
-                                status="solved (no contact unknowns)")
-        solution = replace(solution, u_free=condensed.displacements(solution.contact_force))
-    elif formulation == "strain":
-        solution = function(model, contact, formulation="strain", **options)
-    else:
-        solution = function(model, contact, **options)
-    solved = time.perf_counter()
-    options = {**options, "formulation": formulation} if formulation != "full" else options
-    return make_result(model, solution, method=method, contact=contact, options=options,
-                       timings={"build": built - start, "solve": solved - built})
+            f"formulation={formulation!r} is solved by the methods {', '.join(takes)}, not "
+            f"{method!r}: its tie rows must hold exactly, and {method!r} enforces rows by a "
+            "penalty")
+    checked = {}
+    for name, value in options.items():
+        if name not in spec.options:
+            raise OptionError(f"method {method!r} has no option {name!r} (its options: "
+                              f"{', '.join(spec.options)})")
+        checked[name] = spec.options[name](value)
+    return spec, checked
 
 
-__all__ = ["CONTACT_KINDS", "FORMULATIONS", "METHODS", "as_scene", "check_equality_is_possible",
-           "method_options", "solve", "takes_strain"]
+__all__ = ["CONTACT_KINDS", "DEFAULT_MAX_ITERATIONS", "DEFAULT_TOLERANCE", "FORMULATIONS",
+           "METHODS", "Method", "checked_options"]

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 
-from contactqp.errors import OptionError, SolverError
+from contactqp.errors import SolverError
 
 Step = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 Update = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -30,21 +28,6 @@ def default_max_iterations(n_rows: int) -> int:
     return 50 + 2 * n_rows
 
 
-def iteration_limit(value: Any, name: str = "max_iterations") -> int:
-    """``value`` as a whole number >= 1, else an OptionError naming it."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise OptionError(f"{name} must be a whole number >= 1, got {value!r}")
-    return int(value)
-
-
-def positive_number(value: Any, name: str, unit: str = "") -> float:
-    """``value`` as a positive finite float, else an OptionError naming it."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(
-            value, (int, float, np.integer, np.floating)) or not (
-            math.isfinite(value) and value > 0.0):
-        what = f" ({unit})" if unit else ""
-        raise OptionError(f"{name} must be a positive finite number{what}, got {value!r}")
-    return float(value)
 
 
 def active_set_loop(n_rows: int, step: Step, update: Update, *, method: str,
@@ -56,8 +39,7 @@ def active_set_loop(n_rows: int, step: Step, update: Update, *, method: str,
     terminates: a set that comes back (a cycle) or more than ``max_iterations`` steps is a
     SolverError that says so.
     """
-    limit = default_max_iterations(n_rows) if max_iterations is None else iteration_limit(
-        max_iterations)
+    limit = default_max_iterations(n_rows) if max_iterations is None else int(max_iterations)
     active = np.zeros(n_rows, dtype=bool) if start is None else np.asarray(start, dtype=bool)
     seen = {active.tobytes()}
     for iteration in range(1, limit + 1):

@@ -16,14 +16,8 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp import linalg
-from contactqp.methods._active_set import (
-    DECISION_RTOL,
-    active_set_loop,
-    iteration_limit,
-    positive_number,
-)
-from contactqp.methods.penalty import penalty_value
-from contactqp.model import Model, wall_stiffness, without_circulation
+from contactqp.methods._active_set import DECISION_RTOL, active_set_loop
+from contactqp.model import Condensed, Model, wall_stiffness, without_circulation
 from contactqp.result import Solution
 
 PENALTY_PER_STIFFNESS = 100.0  # default ε: this many times the stiffness the walls see
@@ -31,7 +25,7 @@ DEFAULT_TOLERANCE = 1e-10  # stop when an update changes λ by less than this, r
 DEFAULT_MAX_ITERATIONS = 100
 
 
-def default_penalty(model: Model) -> float:
+def default_penalty(model: Model | Condensed) -> float:
     """ε = 100 × the stiffness the walls see (N/m), :func:`contactqp.model.wall_stiffness`:
     the largest eigenvalue σ of S⁻¹, S the flexibility between the walled nodes. An update
     shrinks the force error of each mode by σᵢ/(σᵢ + ε) <= 1/101, and ε stays far from the
@@ -42,16 +36,14 @@ def default_penalty(model: Model) -> float:
     return PENALTY_PER_STIFFNESS * (1.0 if seen is None else seen)
 
 
-def solve_augmented(model: Model, contact: str, *, penalty: float | None = None,
+def solve_augmented(model: Model | Condensed, contact: str, *, penalty: float | None = None,
                     tolerance: float = DEFAULT_TOLERANCE,
                     max_iterations: int = DEFAULT_MAX_ITERATIONS) -> Solution:
     """Augmented Lagrangian with penalty ε (N/m; default :func:`default_penalty`), multiplier
     updates until one changes λ by at most ``tolerance`` × max(‖λ‖, ‖P‖), or until an update
     no longer shrinks the change (round-off: status says so). If that takes more than
     ``max_iterations`` updates the last iterate is returned with ``claimed_success`` False."""
-    eps = default_penalty(model) if penalty is None else penalty_value(penalty)
-    tolerance = positive_number(tolerance, "tolerance", "relative change of λ")
-    max_iterations = iteration_limit(max_iterations)
+    eps = default_penalty(model) if penalty is None else penalty
     K, P, C, g = model.K, model.P, model.C, model.g
     unilateral = contact == "inequality"
     lam = np.zeros(model.n_contacts)

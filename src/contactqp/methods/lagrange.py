@@ -11,9 +11,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from contactqp import linalg
-from contactqp.errors import OptionError
 from contactqp.methods._active_set import DECISION_RTOL, active_set_loop, displacement_tolerance
-from contactqp.model import Model, elongation_rows
+from contactqp.model import Condensed, Model, elongation_rows
 from contactqp.result import Solution
 
 
@@ -54,7 +53,7 @@ def solve_strain_saddle_point(model: Model, active: np.ndarray) -> tuple[np.ndar
     which makes it banded for a chain. Returns (u, N, λ of the active walls).
     """
     B = elongation_rows(model)
-    k = model.scene.stiffness
+    k = model.layout.element_stiffness
     n, m = model.n_free, k.size
     C = model.C[active]
     hessian = sp.diags_array(np.concatenate((np.zeros(n), k)))
@@ -126,7 +125,7 @@ def _tie_loop(ties: list[tuple[int, int, int]], start: int, goal: int) -> list[i
     return path
 
 
-def solve_lagrange(model: Model, contact: str, *, max_iterations: int | None = None,
+def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: int | None = None,
                    formulation: str = "full") -> Solution:
     """Lagrange multipliers; ``contact`` "equality" (every wall holds) or "inequality";
     ``formulation`` "full" (unknowns u) or "strain" (u and the element elongations e, tied by
@@ -144,8 +143,6 @@ def solve_lagrange(model: Model, contact: str, *, max_iterations: int | None = N
         lam[active] = lam_active
         return u, lam
 
-    if formulation not in ("full", "strain"):
-        raise OptionError(f"lagrange formulation must be 'full' or 'strain'; got {formulation!r}")
     if contact == "equality":
         u, lam = step(np.ones(model.n_contacts, dtype=bool))
         return Solution(u, lam, solver="lagrange", info=_strain_info(element_force))

@@ -6,25 +6,18 @@ set is stable). The answer always leaves a penetration of about λ/ε.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from contactqp import linalg
-from contactqp.methods._active_set import active_set_loop, displacement_tolerance, positive_number
-from contactqp.model import Model, wall_stiffness
+from contactqp.methods._active_set import active_set_loop, displacement_tolerance
+from contactqp.model import Condensed, Model, wall_stiffness
 from contactqp.result import Solution
 
 TEXTBOOK_PENALTY = 1e14  # N/m, the textbook example's ε (in SI units: penalty=1e14)
 PENALTY_PER_STIFFNESS = 1e8  # default ε: this many times the stiffness the walls see
 
 
-def penalty_value(penalty: Any) -> float:
-    """``penalty`` as a positive finite float, else an OptionError naming it."""
-    return positive_number(penalty, "penalty", "force per length, e.g. N/m")
-
-
-def default_penalty(model: Model) -> float:
+def default_penalty(model: Model | Condensed) -> float:
     """ε = 1e8 × the stiffness the walls see (:func:`contactqp.model.wall_stiffness`), in the
     scene's units, so that it means the same in every unit system. The penalty's force error
     is about s/ε of the force (s the stiffness a wall sees), and round-off in K + ε CᵀC grows
@@ -34,11 +27,11 @@ def default_penalty(model: Model) -> float:
     return PENALTY_PER_STIFFNESS * (1.0 if seen is None else seen)
 
 
-def solve_penalty(model: Model, contact: str, *, penalty: float | None = None,
+def solve_penalty(model: Model | Condensed, contact: str, *, penalty: float | None = None,
                   max_iterations: int | None = None) -> Solution:
     """Penalty ``penalty`` (ε, force per length in the scene's units; default
     :func:`default_penalty`); ``contact`` "equality" or "inequality"."""
-    eps = default_penalty(model) if penalty is None else penalty_value(penalty)
+    eps = default_penalty(model) if penalty is None else penalty
     K, P, C, g = model.K, model.P, model.C, model.g
 
     def step(active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -35,17 +35,11 @@ import numpy as np
 import scipy.sparse as sp
 from cvxpy.reductions.solvers import defines
 
-from contactqp.methods._qp_outcome import QPOutcome, vector_or_nan
+from contactqp.methods.qp.outcome import QPOutcome, vector_or_nan
 
 if TYPE_CHECKING:
-    from contactqp.methods.qp import QPProblem
+    from contactqp.methods.qp.problem import QPProblem
 
-NAME = "cvxpy"
-DEFAULT_SOLVER = "CLARABEL"
-KNOWN_SOLVERS = {
-    "CLARABEL": "clarabel", "OSQP": "osqp", "SCS": "scs", "ECOS": "ecos", "CVXOPT": "cvxopt",
-    "PIQP": "piqp", "PROXQP": "proxsuite", "DAQP": "daqp", "HIGHS": "highspy", "QPALM": "qpalm",
-}
 # Branch-and-bound wrappers of a solver that is listed anyway.
 MIXED_INTEGER_ONLY = {"ECOS_BB", "GLPK_MI"}
 # cvxpy runs ProxQP dense: its backend="sparse" path fails with the installed proxsuite
@@ -167,7 +161,8 @@ def clear_cache() -> None:
     _CACHE.clear()
 
 
-def solve(qp: QPProblem, solver: str, settings: dict[str, Any], verbose: bool = False) -> QPOutcome:
+def solve(qp: QPProblem, solver: str, settings: dict[str, Any],
+          verbose: bool = False) -> QPOutcome:
     """Solve ``qp`` through cvxpy with ``solver``; ``settings`` go to the solver."""
     start = time.perf_counter()
     cached, hit = structure(qp)

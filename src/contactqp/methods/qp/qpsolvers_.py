@@ -14,18 +14,11 @@ import numpy as np
 import qpsolvers
 import scipy.sparse as sp
 
-from contactqp.methods._qp_outcome import QPOutcome, vector_or_nan
+from contactqp.methods.qp.outcome import QPOutcome, vector_or_nan
 
 if TYPE_CHECKING:
-    from contactqp.methods.qp import QPProblem
+    from contactqp.methods.qp.problem import QPProblem
 
-NAME = "qpsolvers"
-DEFAULT_SOLVER = "clarabel"
-KNOWN_SOLVERS = {
-    "clarabel": "clarabel", "osqp": "osqp", "scs": "scs", "ecos": "ecos", "cvxopt": "cvxopt",
-    "piqp": "piqp", "proxqp": "proxsuite", "daqp": "daqp", "highs": "highspy",
-    "qpalm": "qpalm", "quadprog": "quadprog",
-}
 DENSE_INPUT = {"quadprog"}  # refuses sparse matrices
 # Settings each solver needs whatever the accuracy: ProxQP's sparse backend (never a dense K);
 # OSQP's raise_error=False (a failure is a status, as for every backend, and no warning).
@@ -51,7 +44,8 @@ def _status(found: qpsolvers.Solution) -> str:
     return text
 
 
-def solve(qp: QPProblem, solver: str, settings: dict[str, Any], verbose: bool = False) -> QPOutcome:
+def solve(qp: QPProblem, solver: str, settings: dict[str, Any],
+          verbose: bool = False) -> QPOutcome:
     """Solve ``qp`` with qpsolvers' ``solver``; ``settings`` go to that solver as keywords."""
     start = time.perf_counter()
     inequality = qp.contact == "inequality"

@@ -11,14 +11,11 @@ from typing import TYPE_CHECKING, Any
 
 import clarabel
 
-from contactqp.methods._qp_outcome import QPOutcome, vector_or_nan
+from contactqp.methods.qp.outcome import QPOutcome, vector_or_nan
 
 if TYPE_CHECKING:
-    from contactqp.methods.qp import QPProblem
+    from contactqp.methods.qp.problem import QPProblem
 
-NAME = "clarabel"
-DEFAULT_SOLVER = "clarabel"
-KNOWN_SOLVERS = {"clarabel": "clarabel"}
 
 
 def installed_solvers() -> tuple[str, ...]:
@@ -29,7 +26,8 @@ def canonical(solver: str) -> str:
     return solver.lower()
 
 
-def solve(qp: QPProblem, solver: str, settings: dict[str, Any], verbose: bool = False) -> QPOutcome:
+def solve(qp: QPProblem, solver: str, settings: dict[str, Any],
+          verbose: bool = False) -> QPOutcome:
     """Solve ``qp`` with Clarabel; ``settings`` are DefaultSettings attributes."""
     start = time.perf_counter()
     options = clarabel.DefaultSettings()

@@ -14,14 +14,11 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
-from contactqp.methods._qp_outcome import QPOutcome, vector_or_nan
+from contactqp.methods.qp.outcome import QPOutcome, vector_or_nan
 
 if TYPE_CHECKING:
-    from contactqp.methods.qp import QPProblem
+    from contactqp.methods.qp.problem import QPProblem
 
-NAME = "osqp"
-DEFAULT_SOLVER = "osqp"
-KNOWN_SOLVERS = {"osqp": "osqp"}
 SOLVED = "solved"  # OSQP's status text for success; "solved inaccurate" is not a claim
 
 
@@ -33,7 +30,8 @@ def canonical(solver: str) -> str:
     return solver.lower()
 
 
-def solve(qp: QPProblem, solver: str, settings: dict[str, Any], verbose: bool = False) -> QPOutcome:
+def solve(qp: QPProblem, solver: str, settings: dict[str, Any],
+          verbose: bool = False) -> QPOutcome:
     """Solve ``qp`` with OSQP; ``settings`` are OSQP settings (eps_abs, polishing, ...)."""
     start = time.perf_counter()
     upper = qp.rows_rhs()

@@ -1,0 +1,37 @@
+"""Scene → model: everything later stages need to know about the algebra.
+
+- :mod:`~contactqp.model.layout`: the numbering of the nodes and the arrays along the chain
+  (element stiffnesses, compliance, contact rows, nodal loads);
+- :mod:`~contactqp.model.chain`: the Model, K (band), P, C, g, the solves with K, the scales
+  F and U;
+- :mod:`~contactqp.model.condense`: the problem condensed onto the contact nodes.
+"""
+
+from contactqp.model.chain import (
+    Model,
+    build_model,
+    determinate_chain_solve,
+    displacement_scale,
+    elongation_rows,
+    wall_stiffness,
+    without_circulation,
+)
+from contactqp.model.condense import CONDENSE_LIMIT, Condensed, condense
+from contactqp.model.layout import (
+    ContactRows,
+    Layout,
+    contact_forces_on_nodes,
+    element_forces,
+    largest,
+    link_forces,
+    load_force_scale,
+    penetration,
+    seen_stiffness,
+)
+
+__all__ = [
+    "CONDENSE_LIMIT", "Condensed", "ContactRows", "Layout", "Model", "build_model", "condense",
+    "contact_forces_on_nodes", "determinate_chain_solve", "displacement_scale",
+    "element_forces", "elongation_rows", "largest", "link_forces", "load_force_scale",
+    "penetration", "seen_stiffness", "wall_stiffness", "without_circulation",
+]

@@ -1,0 +1,306 @@
+"""The model of a scene: minimise ½ uᵀKu − uᵀP subject to C u (<= or =) g, over the free nodes.
+
+K is the stiffness matrix of the chain (:class:`~contactqp.model.layout.Layout`) with the
+supports taken out: tridiagonal, zero coupling between bars, kept in LAPACK's symmetric band
+storage and solved in O(n): by statics when every bar is held by one support, else by one
+banded Cholesky factorisation. With the Lagrangian L = Π + λᵀ(C u − g), λ >= 0 is the force
+with which each wall (or the other bar) pushes, and the contacts' force on the nodes is −Cᵀλ.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from contactqp import linalg
+from contactqp.errors import SolverError
+from contactqp.model.layout import Layout, largest, load_force_scale, seen_stiffness
+from contactqp.scene import Scene
+
+if TYPE_CHECKING:
+    from contactqp.model.condense import Condensed
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """The algebra of a scene (module docstring).
+
+    Attributes
+    ----------
+    layout : the numbering and arrays of the scene (``layout.scene`` the scene itself).
+    free : global node number of each unknown (the free nodes, in order).
+    band : K in LAPACK symmetric lower band storage (2 x n_free: diagonal, sub-diagonal).
+    P : loads on the free nodes.
+    C : sparse contact rows over the free nodes, one per wall (±1) then one per bar contact
+        (+1 at node a, −1 at node b), CSR.
+    g : the contacts' gaps.
+    """
+
+    layout: Layout
+    free: np.ndarray
+    band: np.ndarray
+    P: np.ndarray
+    C: sp.csr_array
+    g: np.ndarray
+
+    @property
+    def scene(self) -> Scene:
+        return self.layout.scene
+
+    @cached_property
+    def K(self) -> sp.csr_array:
+        """K as a sparse CSR matrix (made from the band when first asked for)."""
+        band = self.band
+        return sp.csr_array(sp.diags_array([band[1, :-1], band[0], band[1, :-1]],
+                                           offsets=[-1, 0, 1]))
+
+    def solve_K(self, rhs: np.ndarray) -> np.ndarray:
+        """K⁻¹ rhs (every column of ``rhs``): by statics where every bar is held by one
+        support (:func:`determinate_chain_solve`, exact to round-off), else one banded
+        Cholesky factorisation (LAPACK pbsv). SolverError when K is not positive definite."""
+        if self.determinate is not None:
+            rhs = np.asarray(rhs, dtype=float)
+            out = np.empty(rhs.shape)
+            for block, support in self.determinate:  # one block of free nodes per bar
+                out[block] = determinate_chain_solve(self.compliance_to_support[block], support,
+                                                     rhs[block])
+            return out
+        try:
+            return linalg.solve_spd_band(self.band, rhs)
+        except np.linalg.LinAlgError as error:
+            raise SolverError(f"K is not positive definite ({error})") from None
+
+    @cached_property
+    def determinate(self) -> tuple[tuple[slice, int], ...] | None:
+        """When every bar is held by exactly one support (statically determinate): per bar,
+        the slice of its free nodes and the support's position in that slice. Else None."""
+        scene = self.scene
+        if len(scene.supports) != len(scene.bars):
+            return None
+        first = np.searchsorted(self.free, self.layout.node_offsets)
+        return tuple((slice(int(first[b]), int(first[b + 1])), support)
+                     for b, support in sorted((s.bar, s.node) for s in scene.supports))
+
+    @cached_property
+    def compliance_to_support(self) -> np.ndarray:
+        """φ per free node when every bar is held by one support: Σ 1/k_e over the elements
+        between the node and its bar's support, the displacement a unit force there causes."""
+        parts = []
+        for b, s in sorted((s.bar, s.node) for s in self.scene.supports):  # one per bar
+            from_0 = self.scene.bars[b].compliance
+            parts.append(from_0[1:] if s == 0 else np.abs(np.delete(from_0, s) - from_0[s]))
+        return np.concatenate(parts)
+
+    @property
+    def n_free(self) -> int:
+        return int(self.free.size)
+
+    @property
+    def n_contacts(self) -> int:
+        """Contact rows: one per wall, then one per bar contact."""
+        return int(self.g.size)
+
+    @cached_property
+    def free_displacement(self) -> np.ndarray:
+        """K⁻¹P: the displacement the loads cause with no contact at all."""
+        return self.solve_K(self.P)
+
+    def solve_K_and_loads(self, rhs: np.ndarray) -> np.ndarray:
+        """K⁻¹ rhs (columns), with K⁻¹P (:attr:`free_displacement`) from the same
+        factorisation when it is not known yet."""
+        if "free_displacement" in self.__dict__:
+            return self.solve_K(rhs)
+        rhs = np.asarray(rhs, dtype=float)
+        solved = self.solve_K(np.column_stack((rhs, self.P)))
+        self.__dict__["free_displacement"] = solved[:, -1]
+        return solved[:, :-1] if rhs.ndim == 2 else solved[:, 0]
+
+    @cached_property
+    def force_scale(self) -> float:
+        """F: the scene's force scale, from the loads and the prescribed gaps alone (never from
+        an answer): the largest force the loads put through any cut of a bar
+        (:func:`~contactqp.model.layout.load_force_scale`), and for a wall that starts past
+        its node (gap < 0) the force that pushes the node back, |gap| × the seen stiffness
+        with the supports held. In a scene that nothing loads (the answer is u = 0, λ = 0) it
+        is the softest element's stiffness times :attr:`displacement_scale`."""
+        layout = self.layout
+        walls = self.g[: len(self.scene.walls)]
+        press = np.flatnonzero(walls < 0.0)
+        pushed_back = 0.0
+        if press.size:
+            stiffness = seen_stiffness(layout, np.zeros(0, dtype=np.intp), layout.rows.node[press])
+            pushed_back = float(np.max(-walls[press] * stiffness))
+        scale = max(load_force_scale(layout), pushed_back)
+        if scale > 0.0:
+            return scale
+        return float(layout.element_stiffness.min()) * self.displacement_scale
+
+    @cached_property
+    def displacement_scale(self) -> float:
+        """U: the scene's displacement scale (:func:`displacement_scale`)."""
+        return displacement_scale(self.free_displacement, self.g, self.scene)
+
+    def full_displacements(self, u_free: np.ndarray) -> np.ndarray:
+        """Displacements of every node, zero at the supports."""
+        supports = np.sort(self.layout.support_nodes)
+        # np.insert puts each zero before the free node that follows the support
+        return np.insert(np.asarray(u_free, dtype=float),
+                         [node - i for i, node in enumerate(supports)], 0.0)
+
+
+def displacement_scale(free_displacement: np.ndarray, g: np.ndarray, scene: Scene) -> float:
+    """U, from the loads and the prescribed gaps alone: the largest displacement the loads
+    cause with no contact, ‖K⁻¹P‖∞, or the deepest press fit (largest −gap), whichever is
+    larger. In a scene that nothing loads, the widest gap, or with none the longest bar."""
+    scale = max(largest(free_displacement), float(np.max(-g, initial=0.0)))
+    if scale > 0.0:
+        return scale
+    widest = largest(g)
+    return widest if widest > 0.0 else max(float(b.lengths.sum()) for b in scene.bars)
+
+
+def build_model(scene: Scene | Layout) -> Model:
+    """The model of a scene, O(n) in time and memory: K comes straight from the element
+    stiffnesses in band form (the chain with its supports taken out)."""
+    layout = scene if isinstance(scene, Layout) else Layout(scene)
+    n = layout.n_nodes
+    supports = np.sort(layout.support_nodes)
+    free = np.delete(np.arange(n), supports)
+    k = layout.link_stiffness  # 0 between bars: no element joins them
+    band = np.zeros((2, free.size))
+    # node j's diagonal is k_(j-1) + k_j; its sub-diagonal entry couples it to node j + 1
+    # through element j, unless node j + 1 is a support (then the entry is dropped)
+    diagonal = np.zeros(n)
+    diagonal[:-1] = k
+    diagonal[1:] += k
+    band[0] = np.delete(diagonal, supports)
+    sub = np.zeros(n)
+    sub[:-1] = -k
+    sub[supports[supports > 0] - 1] = 0.0
+    band[1] = np.delete(sub, supports)
+    rows = layout.rows
+    keep = ~np.isin(rows.node, supports)  # a bar contact's supported end contributes nothing
+    columns = rows.node[keep] - np.searchsorted(supports, rows.node[keep])  # free-node numbers
+    C = sp.csr_array((rows.coefficient[keep], (rows.row[keep], columns)),
+                     shape=(rows.gap.size, free.size))
+    P = np.delete(layout.nodal_loads, supports)
+    return Model(layout, free, band, P, C, rows.gap)
+
+
+GREEN_ROWS = 16  # right-hand sides with at most this many loaded rows use the Green's function
+
+
+def determinate_chain_solve(compliance: np.ndarray, support: int, rhs: np.ndarray) -> np.ndarray:
+    """K⁻¹ rhs for a chain held at node ``support`` alone; ``compliance`` is φ per free node
+    (:attr:`Model.compliance_to_support`); rhs rows are the free nodes in order (forces, N).
+
+    Statically determinate: a unit force at node j stretches only the elements between the
+    support and j, so K⁻¹ is the Green's function G_ij = min(φ_i, φ_j) for i, j on the same
+    side of the support, 0 across it. With a few loaded rows (point loads, unit forces at the
+    walls) each costs one pass; otherwise element forces by a cumulative sum of the loads
+    beyond each element, elongations N/k = N·Δφ, displacements by a cumulative sum. Neither
+    assembles K, whose rounded diagonal k_(e-1) + k_e costs 3e-8 of the contact force on a
+    10⁶-element bar through a Cholesky solve (measured); these sums lose ~n·ε.
+    """
+    rhs = np.asarray(rhs, dtype=float)
+    columns = np.ascontiguousarray(np.atleast_2d(rhs.T))  # one row per right-hand side
+    loaded = np.unique(np.concatenate([np.flatnonzero(column) for column in columns]))
+    if loaded.size <= GREEN_ROWS:
+        out = np.zeros(columns.shape)
+        for row in loaded:
+            green = np.minimum(compliance, compliance[row])
+            if support > 0:  # nothing crosses the support
+                if row < support:
+                    green[support:] = 0.0
+                else:
+                    green[:support] = 0.0
+            out += columns[:, row : row + 1] * green
+    else:
+        step = np.diff(compliance[support:], prepend=0.0)  # 1/k_e past the support
+        out = np.empty(columns.shape)
+        right = columns[:, support:]
+        force = np.cumsum(right[:, ::-1], axis=1)[:, ::-1]
+        np.cumsum(force * step, axis=1, out=out[:, support:])
+        if support > 0:
+            step = -np.diff(compliance[:support], append=0.0)
+            elongation = np.cumsum(columns[:, :support], axis=1) * step
+            out[:, :support] = np.cumsum(elongation[:, ::-1], axis=1)[:, ::-1]
+    return out[0] if rhs.ndim == 1 else out.T
+
+
+def elongation_rows(model: Model) -> sp.csr_array:
+    """B (elements x free nodes): B·u_free is the elongation of every element (m), with the
+    supports' zero displacements taken out. The strain formulation's tie rows are B u − e = 0.
+    """
+    layout = model.layout
+    n_elements = layout.n_elements
+    column = np.full(layout.n_nodes, -1)
+    column[model.free] = np.arange(model.n_free)
+    element = np.arange(n_elements)
+    first = np.delete(np.arange(layout.n_nodes - 1), layout.junctions)  # element e's first node
+    rows = np.concatenate((element, element))
+    nodes = np.concatenate((first, first + 1))
+    signs = np.concatenate((-np.ones(n_elements), np.ones(n_elements)))
+    keep = column[nodes] >= 0
+    return sp.csr_array((signs[keep], (rows[keep], column[nodes][keep])),
+                        shape=(n_elements, model.n_free))
+
+
+def without_circulation(model: Model | Condensed, contact_force: np.ndarray) -> np.ndarray:
+    """Contact forces (N) with the part taken out that rows holding a node at one position
+    both ways would carry round and round: walls on both sides of a node whose gaps sum to 0
+    (a clamped node), and the one-way loops of walls and bar contacts whose gaps add up
+    (:attr:`Layout.tight_cycles`). Such a common part moves nothing, so the rows alone leave
+    it open; the exact answer has none (contactqp.result)."""
+    lam = np.array(contact_force, dtype=float)
+    C = model.C
+    single = np.flatnonzero(np.diff(C.indptr) == 1)
+    if single.size:
+        column, sign = C.indices[C.indptr[single]], C.data[C.indptr[single]]
+        plus = np.full(C.shape[1], -1)
+        minus = np.full(C.shape[1], -1)
+        plus[column[sign > 0]] = single[sign > 0]
+        minus[column[sign < 0]] = single[sign < 0]
+        both = (plus >= 0) & (minus >= 0)
+        p, m = plus[both], minus[both]
+        clamped = model.g[p] + model.g[m] == 0.0
+        p, m = p[clamped], m[clamped]
+        common = np.maximum(np.minimum(lam[p], lam[m]), 0.0)
+        lam[p] -= common
+        lam[m] -= common
+    for cycle in model.layout.tight_cycles:
+        rows = list(cycle)
+        lam[rows] -= max(float(lam[rows].min()), 0.0)
+    return lam
+
+
+EXACT_WALL_STIFFNESS_LIMIT = 64  # wall nodes up to which wall_stiffness solves for S exactly
+
+
+def wall_stiffness(model: Model | Condensed) -> float | None:
+    """The stiffest way the walled nodes can be moved together (N/m): the largest eigenvalue of
+    S⁻¹, S = B K⁻¹ Bᵀ the flexibility between the walled nodes (B selects them). One wall:
+    1/(K⁻¹)ᵢᵢ, the stiffness it sees (mesh-independent). Two walls on nodes joined by a stiff
+    element: that element's stretching mode. Above :data:`EXACT_WALL_STIFFNESS_LIMIT` walled
+    nodes, the bound λmax(S⁻¹) <= λmax(K_BB) <= largest row sum of |K_BB| (S⁻¹ is K_BB less a
+    positive semidefinite term; Gershgorin). None without walls."""
+    nodes = np.unique(model.C.indices)
+    if nodes.size == 0:
+        return None
+    if nodes.size > EXACT_WALL_STIFFNESS_LIMIT:
+        K_BB = model.K[nodes][:, nodes]
+        return float(np.abs(K_BB).sum(axis=1).max())
+    selector = np.zeros((model.n_free, nodes.size))
+    selector[nodes, np.arange(nodes.size)] = 1.0
+    S = model.solve_K(selector)[nodes]
+    smallest = float(sla.eigvalsh(0.5 * (S + S.T), check_finite=False)[0])
+    return 1.0 / smallest if smallest > 0.0 else float(np.abs(model.K.diagonal()[nodes]).max())
+
+
+__all__ = ["Model", "build_model", "determinate_chain_solve", "displacement_scale",
+           "elongation_rows", "wall_stiffness", "without_circulation"]

@@ -1,0 +1,260 @@
+"""A scene laid out as one chain of nodes: the numbering and the per-element and per-node
+arrays every later stage reads (the model, the methods' helpers, the check, the reference and
+the charts), computed once per scene.
+
+The nodes of every bar are numbered in one sequence, bar after bar (:meth:`Layout.node`); no
+element joins the last node of one bar to the first node of the next, so the chain has a
+*junction* there (no element, zero stiffness). Contact rows: one per wall in scene order, then
+one per bar contact, each written sign·u_node <= gap (a wall) or u_a − u_b <= gap (a bar
+contact), with λ >= 0 the force with which the wall (the other bar) pushes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import NamedTuple
+
+import numpy as np
+
+from contactqp.scene import Scene
+
+
+class ContactRows(NamedTuple):
+    """The contact rows C u <= g as (row, node, coefficient) of every nonzero of C in global
+    node numbering (a wall has one, a bar contact two: +1 at a, −1 at b), and g per row."""
+
+    row: np.ndarray
+    node: np.ndarray
+    coefficient: np.ndarray
+    gap: np.ndarray
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.flags.writeable = False
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class Layout:
+    """The numbering of a scene's nodes and the arrays along it (module docstring)."""
+
+    scene: Scene
+
+    @cached_property
+    def node_offsets(self) -> np.ndarray:
+        """Global number of each bar's node 0, and the total node count last."""
+        return np.concatenate(([0], np.cumsum([b.n_nodes for b in self.scene.bars])))
+
+    def node(self, bar: int, node: int) -> int:
+        """The number of node ``node`` of bar ``bar`` in the one node sequence."""
+        return int(self.node_offsets[bar]) + int(node)
+
+    def bar_of(self, nodes: np.ndarray) -> np.ndarray:
+        """The bar of each of ``nodes`` (global)."""
+        return np.searchsorted(self.node_offsets, nodes, side="right") - 1
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.node_offsets[-1])
+
+    @property
+    def n_elements(self) -> int:
+        return self.n_nodes - len(self.scene.bars)
+
+    @property
+    def n_contacts(self) -> int:
+        return self.scene.n_contacts
+
+    @cached_property
+    def junctions(self) -> np.ndarray:
+        """Links j (between global nodes j and j + 1) that no element spans: a bar's last
+        node and the next bar's first."""
+        return self.node_offsets[1:-1] - 1
+
+    def _per_element(self, values: list[np.ndarray]) -> np.ndarray:
+        return _read_only(np.concatenate(values))
+
+    @cached_property
+    def element_stiffness(self) -> np.ndarray:
+        """k_e = E·A/L of every element, bar after bar (N/m)."""
+        return self._per_element([b.element_stiffness for b in self.scene.bars])
+
+    @cached_property
+    def areas(self) -> np.ndarray:
+        """Area of every element, bar after bar."""
+        return self._per_element([b.areas for b in self.scene.bars])
+
+    @cached_property
+    def yield_stress(self) -> np.ndarray | None:
+        """Yield stress of every element (NaN on a bar without one), None if no bar has one."""
+        bars = self.scene.bars
+        if all(b.yield_stress is None for b in bars):
+            return None
+        return self._per_element([np.full(b.n_elements, np.nan if b.yield_stress is None
+                                          else b.yield_stress) for b in bars])
+
+    @cached_property
+    def compliance(self) -> np.ndarray:
+        """Σ L/(EA) from its bar's node 0 to every node (m/N), bar after bar."""
+        return self._per_element([b.compliance for b in self.scene.bars])
+
+    @cached_property
+    def link_stiffness(self) -> np.ndarray:
+        """The stiffness between global nodes j and j + 1 (N/m): the element's, 0 at a
+        junction."""
+        return _read_only(np.insert(self.element_stiffness,
+                                    self.junctions - np.arange(self.junctions.size), 0.0))
+
+    @cached_property
+    def node_x(self) -> np.ndarray:
+        """x of every node, for drawing: each bar starts where the one before ends."""
+        xs, start = [], 0.0
+        for b in self.scene.bars:
+            xs.append(start + b.node_x)
+            start = float(xs[-1][-1])
+        return _read_only(np.concatenate(xs))
+
+    @cached_property
+    def support_nodes(self) -> np.ndarray:
+        """Global node of each support, in scene order."""
+        return _read_only(np.array([self.node(s.bar, s.node) for s in self.scene.supports],
+                                   dtype=np.intp))
+
+    @cached_property
+    def load_nodes(self) -> np.ndarray:
+        """Global node of each point load, in scene order."""
+        return _read_only(np.array([self.node(p.bar, p.node) for p in self.scene.loads],
+                                   dtype=np.intp))
+
+    @cached_property
+    def rows(self) -> ContactRows:
+        """The contact rows (:class:`ContactRows`)."""
+        walls, contacts = self.scene.walls, self.scene.contacts
+        wall_nodes = np.array([self.node(w.bar, w.node) for w in walls], dtype=np.intp)
+        a = np.array([self.node(c.bar_a, c.node_a) for c in contacts], dtype=np.intp)
+        b = np.array([self.node(c.bar_b, c.node_b) for c in contacts], dtype=np.intp)
+        n_walls = len(walls)
+        return ContactRows(
+            _read_only(np.concatenate((np.arange(n_walls), n_walls + np.arange(a.size),
+                                       n_walls + np.arange(b.size))).astype(np.intp)),
+            _read_only(np.concatenate((wall_nodes, a, b)).astype(np.intp)),
+            _read_only(np.concatenate(([w.sign for w in walls], np.ones(a.size),
+                                       -np.ones(b.size))).astype(float)),
+            _read_only(np.array([w.gap for w in walls] + [c.gap for c in contacts],
+                                dtype=float)))
+
+    @property
+    def gaps(self) -> np.ndarray:
+        """g: the gap of every contact row."""
+        return self.rows.gap
+
+    @cached_property
+    def distributed_nodal_loads(self) -> np.ndarray:
+        """The distributed loads' consistent nodal forces per global node (N): each element
+        passes intensity × length / 2 to each of its two nodes."""
+        p = np.zeros(self.n_nodes)
+        for q in self.scene.distributed:
+            bar = self.scene.bars[q.bar]
+            stop = bar.n_elements if q.stop is None else q.stop
+            half = 0.5 * float(q.intensity) * bar.lengths[q.start:stop]
+            first = self.node(q.bar, q.start)
+            p[first:first + half.size] += half
+            p[first + 1:first + 1 + half.size] += half
+        return _read_only(p)
+
+    @cached_property
+    def nodal_loads(self) -> np.ndarray:
+        """The point loads and the distributed loads' nodal forces summed per global node (N)."""
+        p = self.distributed_nodal_loads.copy()
+        np.add.at(p, self.load_nodes, np.array([q.force for q in self.scene.loads], dtype=float))
+        return _read_only(p)
+
+    def load_point(self) -> int:
+        """The global node whose displacement a load path follows: the first point load's
+        node, else the node with the largest nodal load."""
+        if self.scene.loads:
+            return int(self.load_nodes[0])
+        return int(np.abs(self.nodal_loads).argmax())
+
+    @cached_property
+    def tight_cycles(self) -> tuple[tuple[int, ...], ...]:
+        """The contact rows of every one-way loop through a bar contact whose gaps add up to
+        zero (:func:`contactqp.feasibility.tight_cycles`)."""
+        from contactqp.feasibility import tight_cycles
+
+        return tight_cycles(self.scene)
+
+
+def element_forces(layout: Layout, u: np.ndarray) -> np.ndarray:
+    """Axial force of every element (N, tension positive) from the nodal displacements,
+    bar after bar."""
+    stretch = np.diff(u)
+    if layout.junctions.size:
+        stretch = np.delete(stretch, layout.junctions)
+    return layout.element_stiffness * stretch
+
+
+def link_forces(layout: Layout, forces: np.ndarray) -> np.ndarray:
+    """Element forces placed on the links between global nodes j and j + 1 (0 at a junction)."""
+    if not layout.junctions.size:
+        return forces
+    return np.insert(forces, layout.junctions - np.arange(layout.junctions.size), 0.0)
+
+
+def contact_forces_on_nodes(layout: Layout, contact_force: np.ndarray) -> np.ndarray:
+    """Force of the walls and bar contacts on each node in +x (N): −Cᵀλ in node numbering."""
+    rows = layout.rows
+    f = np.zeros(layout.n_nodes)
+    np.add.at(f, rows.node, -rows.coefficient * np.asarray(contact_force, dtype=float)[rows.row])
+    return f
+
+
+def penetration(layout: Layout, u: np.ndarray) -> np.ndarray:
+    """How far each contact is closed past its gap, C u − g: positive = penetrated."""
+    rows = layout.rows
+    closed = np.zeros(rows.gap.size)
+    np.add.at(closed, rows.row, rows.coefficient * u[rows.node])
+    return closed - rows.gap
+
+
+def seen_stiffness(layout: Layout, held: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """The seen stiffness (N/m) of each of ``nodes`` (global) with the supports and the nodes
+    ``held`` fixed: 1/c_left + 1/c_right, c the compliance to the nearest fixed node on that
+    side in the same bar (no term when there is none; a node does not hold itself)."""
+    phi = layout.compliance
+    fixed = np.unique(np.concatenate((layout.support_nodes, np.asarray(held, dtype=np.intp))))
+    fixed_bar, node_bar = layout.bar_of(fixed), layout.bar_of(nodes)
+    stiffness = np.zeros(nodes.size)
+    for neighbour, sign in ((np.searchsorted(fixed, nodes, side="left") - 1, 1.0),
+                            (np.searchsorted(fixed, nodes, side="right"), -1.0)):
+        near = (neighbour >= 0) & (neighbour < fixed.size)
+        near[near] &= fixed_bar[neighbour[near]] == node_bar[near]
+        stiffness[near] += 1.0 / (sign * (phi[nodes[near]] - phi[fixed[neighbour[near]]]))
+    return stiffness
+
+
+def largest(values: np.ndarray) -> float:
+    """∞-norm (0 for no values; inf when any value is NaN or infinite)."""
+    values = np.asarray(values, dtype=float)
+    if values.size == 0:
+        return 0.0
+    top = max(float(values.max()), -float(values.min()))
+    return top if np.isfinite(top) else np.inf
+
+
+def load_force_scale(layout: Layout) -> float:
+    """The largest force the scene's loads put through any cut of a bar (N): over every bar
+    and every node, the resultant of the loads (point and distributed) on either side, and
+    every nodal load itself. A distributed load counts whole, not per node."""
+    loads = layout.nodal_loads
+    offsets = layout.node_offsets
+    sizes = np.diff(offsets)
+    left = np.cumsum(loads)
+    left -= np.repeat(np.r_[0.0, left[offsets[1:-1] - 1]], sizes)  # from each bar's node 0
+    right = np.repeat(left[offsets[1:] - 1], sizes) - left
+    return max(largest(left), largest(right), largest(loads))
+
+
+__all__ = ["ContactRows", "Layout", "contact_forces_on_nodes", "element_forces", "largest",
+           "link_forces", "load_force_scale", "penetration", "seen_stiffness"]

@@ -1,0 +1,95 @@
+"""The one pipeline: scene → model → formulation → method → checked Result.
+
+:func:`solve` is what users call; :func:`solve_model` is the part after the model, which the
+load path (contactqp.curve) calls with a model it has factored once.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from typing import Any
+
+import numpy as np
+
+from contactqp.builders import default_scene
+from contactqp.errors import OptionError
+from contactqp.feasibility import equality_conflict
+from contactqp.methods import Method, checked_options
+from contactqp.model import Condensed, Model, build_model, condense
+from contactqp.result import Result, Solution, make_result
+from contactqp.scene import Scene
+from contactqp.scene_io import load_scene
+
+
+def as_scene(scene: Scene | str | os.PathLike | None) -> Scene:
+    """The scene to solve: the default scene for None, a scene file read for a path."""
+    if scene is None:
+        return default_scene()
+    if isinstance(scene, (str, os.PathLike)):
+        return load_scene(scene)
+    if not isinstance(scene, Scene):
+        raise OptionError(f"scene must be a contactqp.Scene, a scene file's path or None, "
+                          f"got {type(scene).__name__}")
+    return scene
+
+
+def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrange",
+          contact: str = "inequality", formulation: str = "full", **options: Any) -> Result:
+    """Solve a scene by ``method`` with ``contact`` "inequality" (unilateral, the default) or
+    "equality" (the textbook form), and return a checked :class:`~contactqp.result.Result`.
+
+    ``scene``: a Scene, the path of a scene file (read by :func:`contactqp.load_scene`), or
+    None for the default scene.
+
+    Methods and their options (:data:`contactqp.methods.METHODS`): "lagrange"
+    (max_iterations), "penalty" (penalty ε, force per length in the scene's units, default
+    1e8 × the stiffness the walls see; max_iterations), "augmented" (penalty, default 100 ×
+    the stiffness the walls see; tolerance, default 1e-10; max_iterations), "qp" (backend
+    "clarabel" (default), "osqp", "cvxpy" or "qpsolvers"; solver, None for the backend's
+    default; accuracy "default" or "high"; scale, default True; verbose, default False: see
+    :mod:`contactqp.methods.qp`).
+
+    ``formulation``: "full" (every free node an unknown), "condensed" (K factored once, the
+    method sees only the nodes that carry contacts, every displacement recovered from the same
+    factorisation: :func:`contactqp.model.condense`) or "strain" (lagrange and qp only: the
+    element elongations are unknowns too, tied to the displacements by equality rows whose
+    multipliers are the element forces: :func:`contactqp.model.elongation_rows`).
+    """
+    scene = as_scene(scene)
+    spec, options = checked_options(method, contact, formulation, options)
+    if contact == "equality":
+        conflict = equality_conflict(scene)
+        if conflict:
+            raise OptionError(conflict)
+    start = time.perf_counter()
+    model = build_model(scene)
+    built = time.perf_counter()
+    solution = solve_model(model, spec, contact, formulation, options)
+    solved = time.perf_counter()
+    options = {**options, "formulation": formulation} if formulation != "full" else options
+    return make_result(model, solution, method=method, contact=contact, options=options,
+                       timings={"build": built - start, "solve": solved - built})
+
+
+def solve_model(model: Model, spec: Method, contact: str, formulation: str,
+                options: dict[str, Any], condensed: Condensed | None = None) -> Solution:
+    """Solve a model by a method (options already checked) in a formulation; with
+    ``formulation="condensed"`` on ``condensed`` when given (else the model is condensed
+    here). The Solution's displacements are always the full model's free nodes."""
+    if formulation == "strain":
+        return spec.solve(model, contact, formulation="strain", **options)
+    if formulation != "condensed":
+        return spec.solve(model, contact, **options)
+    condensed = condense(model) if condensed is None else condensed
+    if condensed.n_free:
+        solution = spec.solve(condensed, contact, **options)
+    else:  # no contacts: nothing left to solve, u = K⁻¹P
+        solution = Solution(np.zeros(0), np.zeros(0), solver=spec.name,
+                            status="solved (no contact unknowns)")
+    return Solution(condensed.displacements(solution.contact_force), solution.contact_force,
+                    solution.solver, solution.iterations, solution.status,
+                    solution.claimed_success, solution.info)
+
+
+__all__ = ["as_scene", "solve", "solve_model"]

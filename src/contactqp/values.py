@@ -1,0 +1,107 @@
+"""One check per kind of value a user gives, scene field or method option alike: each returns
+the value in the form the library uses, or raises the given error naming the field (as it is
+spelled in a scene file, or the option's name) and the value as the user wrote it."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from contactqp.errors import ContactqpError, SceneError
+
+# Every number of a scene is 0 or between 1/MAGNITUDE and MAGNITUDE in size: then every
+# product the model and the check form (stiffness E·A/L, displacement load/stiffness, energy,
+# a penalty 1e8 times a stiffness) stays far inside double precision, with no overflow.
+MAGNITUDE = 1e30
+
+
+def is_number(value: Any) -> bool:
+    """A real number (int or float, numpy's too), not a boolean and not text."""
+    return not isinstance(value, (bool, np.bool_)) and isinstance(
+        value, (int, float, np.integer, np.floating))
+
+
+def shown(value: Any) -> str:
+    """The value as the user wrote it (numpy scalars as plain Python)."""
+    return repr(value.item() if isinstance(value, np.generic) else value)
+
+
+def in_range(name: str, number: float, tiny: bool = False,
+             error: type[ContactqpError] = SceneError) -> float:
+    """``number`` if it is finite and 0 or within MAGNITUDE's range. ``tiny``: any small size
+    will do (a gap, a load: no product of the model grows from it)."""
+    if not math.isfinite(number):
+        raise error(f"{name} must be finite, got {number!r}")
+    if abs(number) > MAGNITUDE or (not tiny and number != 0.0 and abs(number) < 1 / MAGNITUDE):
+        raise error(f"{name} = {number!r} is outside the range contactqp computes in (0, or "
+                    f"{1 / MAGNITUDE:.0e} to {MAGNITUDE:.0e} in size; choose other units)")
+    return number
+
+
+def number(name: str, value: Any, *, minimum: float | None = None, strict: bool = False,
+           tiny: bool = False, error: type[ContactqpError] = SceneError) -> float:
+    """``value`` as a finite float within range (optionally >= or > ``minimum``)."""
+    if not is_number(value):
+        raise error(f"{name} must be a number, got {shown(value)}")
+    result = float(value)
+    if not math.isfinite(result):
+        raise error(f"{name} must be finite, got {result!r}")
+    if minimum is not None and (result <= minimum if strict else result < minimum):
+        raise error(f"{name} must be {'>' if strict else '>='} {minimum:g}, got {result!r}")
+    return in_range(name, result, tiny, error)
+
+
+def positive_number(name: str, value: Any, unit: str = "",
+                    error: type[ContactqpError] = SceneError) -> float:
+    """``value`` as a positive finite float (``unit`` named in the message)."""
+    if not is_number(value) or not (math.isfinite(value) and value > 0.0):
+        what = f" ({unit})" if unit else ""
+        raise error(f"{name} must be a positive finite number{what}, got {shown(value)}")
+    return float(value)
+
+
+def whole_number(name: str, value: Any, minimum: int | None = None, what: str = "number",
+                 error: type[ContactqpError] = SceneError) -> int:
+    """``value`` as an int (not a boolean, not a float), at least ``minimum``."""
+    if not isinstance(value, (int, np.integer)) or isinstance(value, (bool, np.bool_)) or (
+            minimum is not None and value < minimum):
+        at_least = "" if minimum is None else f" >= {minimum}"
+        raise error(f"{name} must be a whole {what}{at_least}, got {shown(value)}")
+    return int(value)
+
+
+def flag(name: str, value: Any, error: type[ContactqpError] = SceneError) -> bool:
+    """``value`` if it is True or False."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise error(f"{name} must be True or False, got {shown(value)}")
+    return bool(value)
+
+
+def positive_numbers(name: str, values: Any, limit: int) -> np.ndarray:
+    """``values`` (one or more) as a read-only float array, every one a positive finite
+    number within range; at most ``limit`` of them."""
+    if isinstance(values, (str, bytes)):
+        raise SceneError(f"{name} must be numbers, got {values!r}")
+    try:
+        raw = np.asarray(values)
+    except (TypeError, ValueError):
+        raise SceneError(f"{name} must be numbers, got {values!r}") from None
+    if raw.dtype.kind not in "iuf":  # strings, booleans, objects: name the first non-number
+        items = values if isinstance(values, (list, tuple)) else raw.reshape(-1)
+        for i, value in enumerate(items):
+            if not is_number(value):
+                raise SceneError(f"{name}[{i}] must be a number, got {shown(value)}")
+    if raw.size > limit:
+        raise SceneError(f"{name} has {raw.size} values; contactqp takes at most {limit} "
+                         "elements in a scene")
+    array = raw.astype(float).reshape(-1)
+    bad = np.flatnonzero(~np.isfinite(array) | (array <= 0.0))
+    if bad.size:
+        i = int(bad[0])
+        raise SceneError(f"{name}[{i}] must be a positive finite number, got {float(array[i])!r}")
+    for i in (int(array.argmin()), int(array.argmax())) if array.size else ():
+        in_range(f"{name}[{i}]", float(array[i]))
+    array.flags.writeable = False
+    return array
