@@ -1,7 +1,7 @@
 """Does ``verified`` mean right? Every method and solver on many random scenes, against the exact
 reference.
 
-    python benchmarks/guarantee.py [--scenes N] [--seed S] [--out FILE.json]
+    python benchmarks/run.py --cases guarantee [--scenes N] [--seed S] [--out DIR]
 
 Scenes come from contactqp.random_scenes (one to three bars, areas over five decades, zero
 gaps, press fits, walls on both sides, bar contacts, distributed loads). Each is solved by
@@ -19,17 +19,17 @@ with contactqp.reference and classed:
     flagged, wrong           the check rejects a wrong answer (as it should)
     failed                   the method raised (an active-set cycle, a refused formulation)
 
-The counts go to stdout and, with --out, to a JSON file with every run beyond its bound.
+The counts go to stdout and, with --out, to guarantee.json with every run beyond its bound.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
 import warnings
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 
@@ -70,18 +70,15 @@ def classify(result: contactqp.Result, exact) -> tuple[str, float, float]:
         displacement / U
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--scenes", type=int, default=1000)
-    parser.add_argument("--seed", type=int, default=2026)
-    parser.add_argument("--out", help="JSON file for the counts and every run beyond bound")
-    args = parser.parse_args(argv)
-    rng = np.random.default_rng(args.seed)
+def main(scenes: int, seed: int, out: Path | None = None) -> int:
+    """Run the family, print the counts, write guarantee.json into ``out``; 1 when a verified
+    answer was beyond its bound or the guarantee."""
+    rng = np.random.default_rng(seed)
     counts: Counter[str] = Counter()
     by_run: dict[str, Counter[str]] = {}
     beyond = []
     start = time.perf_counter()
-    for index in range(args.scenes):
+    for index in range(scenes):
         scene = random_scene(rng)
         exact = reference(scene)
         for method, options, formulation in runs(rng):
@@ -109,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{index + 1} scenes, {sum(counts.values())} runs, "
                   f"{time.perf_counter() - start:.0f} s", file=sys.stderr)
     total = sum(counts.values())
-    print(f"{args.scenes} random scenes (seed {args.seed}), {total} runs, "
+    print(f"{scenes} random scenes (seed {seed}), {total} runs, "
           f"{time.perf_counter() - start:.0f} s")
     for kind in ("verified, within bound", "verified, beyond bound", "verified, wrong",
                  "flagged, right", "flagged, wrong", "failed"):
@@ -118,13 +115,11 @@ def main(argv: list[str] | None = None) -> int:
     for label, c in sorted(by_run.items()):
         print(f"  {label:<28} {c['verified, within bound']:>5} {c['flagged, right']:>5} "
               f"{c['flagged, wrong']:>5} {c['failed']:>5}")
-    if args.out:
-        with open(args.out, "w", encoding="utf-8") as handle:
-            json.dump({"scenes": args.scenes, "seed": args.seed, "counts": dict(counts),
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        with open(out / "guarantee.json", "w", encoding="utf-8") as handle:
+            json.dump({"scenes": scenes, "seed": seed, "counts": dict(counts),
                        "by_run": {k: dict(v) for k, v in by_run.items()},
                        "beyond_bound": beyond}, handle, indent=1)
     return 1 if counts["verified, beyond bound"] or counts["verified, wrong"] else 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

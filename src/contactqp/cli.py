@@ -259,7 +259,7 @@ def parser() -> argparse.ArgumentParser:
                               help="full, condensed (contact nodes only) or strain (lagrange, qp)")
     solve_parser.add_argument("--penalty", type=float,
                               help="penalty ε (force per length in the scene's units; default "
-                                   "1e8 x the stiffness the walls see), methods penalty and "
+                                   "1e6 x the stiffness the walls see), methods penalty and "
                                    "augmented; the textbook's is 1e14 (N/m)")
     solve_parser.add_argument("--backend", help="QP backend, method qp (see contactqp solvers)")
     solve_parser.add_argument("--solver", help="QP solver of the backend, method qp")

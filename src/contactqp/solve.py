@@ -44,7 +44,7 @@ def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrang
 
     Methods and their options (:data:`contactqp.methods.METHODS`): "lagrange"
     (max_iterations), "penalty" (penalty ε, force per length in the scene's units, default
-    1e8 × the stiffness the walls see; max_iterations), "augmented" (penalty, default 100 ×
+    1e6 × the stiffness the walls see; max_iterations), "augmented" (penalty, default 100 ×
     the stiffness the walls see; tolerance, default 1e-10; max_iterations), "qp" (backend
     "clarabel" (default), "osqp", "cvxpy" or "qpsolvers"; solver, None for the backend's
     default; accuracy "default" or "high"; scale, default True; verbose, default False: see

@@ -1,0 +1,276 @@
+"""What an answer's residuals imply for its error: the bounds behind ``verified``.
+
+The check (contactqp.check) reads an answer as the exact answer of a nearby scene: contacts
+that push are held where the answer puts them, the force on every other contact (and every
+pulling force) is moved off it as a load, and what equilibrium leaves over is a load too.
+This module works out, run by run between held nodes, what those moves do to the contact
+forces and the displacements (:func:`error_bounds`), in O(n).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from contactqp.model import Layout, largest, penetration, seen_stiffness
+
+ROUND_OFF = 4.0 * np.finfo(float).eps  # a few units in the last place of what is stored
+
+
+@dataclass(frozen=True)
+class Bounds:
+    residuals: dict[str, float | None]
+    force_error_bound: float
+    displacement_error_bound: float
+
+
+def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarray,
+                 nodes: np.ndarray, external: np.ndarray, r_max: float, contact: str,
+                 F: float, U: float, hold: float) -> Bounds:
+    """The residuals and the error bounds of an answer (module docstring); a contact whose
+    force passes ``hold`` × F counts as pushing when the held nodes are chosen.
+
+    The answer is exact for a nearby scene: the rows that push are held at where the answer
+    puts them (their gaps moved by δ = |penetration|), the other rows' forces and every
+    pulling force are moved off them as loads, and what equilibrium leaves over is a load too.
+    With the held nodes fixed, those loads' effect is computed exactly, run by run between
+    held nodes (:func:`propagate`); a held node moved by δ moves its runs by at most δ and
+    changes the forces at itself and its held neighbours (:func:`gap_moves`)."""
+    rows, row_nodes, _, gaps = layout.rows
+    n_rows = gaps.size
+    pen = penetration(layout, u)
+    equality = contact == "equality"
+    if equality:
+        pushing = np.ones(n_rows, dtype=bool)
+    else:
+        held_rows = lam > hold * F
+        held = np.concatenate((layout.support_nodes, row_nodes[held_rows[rows]]))
+        s = row_stiffness(layout, np.unique(held), held_rows)
+        stand_off = np.maximum(-pen, 0.0)
+        pushing = lam > stand_off * s  # closing its gap is the smaller move
+    held = np.unique(np.concatenate((layout.support_nodes, row_nodes[pushing[rows]])))
+    s, s_ends = row_stiffness(layout, held, pushing, ends=True)
+    delta = np.abs(pen) if equality else np.where(pushing, np.abs(pen), np.maximum(pen, 0.0))
+    moved = np.where(pushing, 0.0, lam)  # an open row's force (or a pull) becomes a load
+    n_loads = external.size - row_nodes.size - layout.support_nodes.size
+    kept_external = external.copy()  # the contacts of the nearby scene carry only the rest
+    kept_external[n_loads:n_loads + row_nodes.size][~pushing[rows]] = 0.0
+    force_error, sway = propagate(layout, held, links, nodes, kept_external)
+    pair = 0.0 if equality else _both_sides(layout, lam)
+    # an open row moved onto its wall (it penetrates) is held too, with no force of its own
+    # closing a bar contact's gap δ moves each end by its share, δ·s/s_end (a wall's node: δ)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = np.where(np.isinf(s_ends), 0.0,  # a rigid end does not move
+                         np.where(s_ends > 0.0, s[rows] / s_ends, 1.0))
+    end_moves = np.where(delta[rows] > 0.0, delta[rows] * np.minimum(share, 1.0), 0.0)
+    gap_force, gap_move, moves = gap_moves(layout, held, row_nodes, end_moves, pushing)
+    # ... and a held node that moves drags its run along: an open contact there whose gap is
+    # smaller than that would close, and take what closing the rest of the move needs
+    # (measured: quadprog left a wall 2.5e-12 m open beside one held 1.7e-11 m off, across
+    # an element of 7e13 N/m, 963 N off and verified without this)
+    closing = 0.0 if equality else _closing(layout, moves, row_nodes, rows,
+                                            np.where(pushing, np.inf, np.maximum(-pen, 0.0)), s)
+    force_bound = max(force_error, largest(moved)) + gap_force + pair + closing
+    # a pushing bar contact is held at both ends above, but the two ends move together: the
+    # force error it carries moves them by that force over the stiffness both bars give them
+    # there, and its bars' forces and displacements by up to as much again (measured: without
+    # the factor 2, up to 1.4 times the bound on random scenes of several bars)
+    give = _contact_give(layout, held, pushing)
+    coupled = 2.0 if give > 0.0 else 1.0
+    displacement_bound = coupled * (sway + gap_move) + force_bound * give
+    force_bound *= coupled
+    # and the answer itself is only stored to a few units of round-off: a force of 2e8 N from
+    # a press fit on a stiff element is one float step (3e-8 N) from any other
+    force_bound += ROUND_OFF * max(largest(lam), largest(links), F)
+    displacement_bound += ROUND_OFF * max(largest(u), U)
+    feasibility = largest((np.abs(pen) if equality else np.maximum(pen, 0.0)) * s) / F
+    residuals: dict[str, float | None] = {"equilibrium": r_max / F, "feasibility": feasibility}
+    if equality:
+        residuals.update(complementarity=None, sign=None)
+    else:
+        natural = np.minimum(np.maximum(lam, 0.0), np.maximum(-pen, 0.0) * s)
+        residuals["complementarity"] = max(largest(natural), pair) / F
+        residuals["sign"] = float(np.max(-lam, initial=0.0)) / F
+    residuals["force"] = force_bound / F
+    residuals["displacement"] = displacement_bound / U
+    return Bounds(residuals, force_bound, displacement_bound)
+
+
+def propagate(layout: Layout, held: np.ndarray, links: np.ndarray, nodes: np.ndarray,
+              external: np.ndarray) -> tuple[float, float]:
+    """What the imbalance of an answer does with the ``held`` nodes (sorted) fixed: (the
+    largest force error at a held node, N; the largest displacement error, m).
+
+    r_j, the residual of cut j (element force from u against the outside forces ``external``
+    on the nodes before it), is a load pattern: its jumps are the nodal imbalances. Between
+    two held nodes the exact answer of the imbalanced scene has element forces N_j − (c − r_j)
+    ... i.e. its element force errors are c − r_j, with c such that the run's elongation
+    errors (c − r_j)/k_j add up to nothing; a run held at one end only (a bar's tail or head)
+    has c the cut residual past the bar's free end. The displacement error is the running sum
+    of the elongation errors from the held end, and a held node's force error is the jump of c
+    across it."""
+    offsets = layout.node_offsets
+    outside = np.cumsum(np.bincount(nodes, external, minlength=layout.n_nodes))
+    k = layout.link_stiffness
+    element = np.flatnonzero(k > 0.0)
+    if element.size == 0:
+        return 0.0, 0.0
+    r = (links + outside[:-1])[element]
+    flexibility = 1.0 / k[element]
+    bar = np.searchsorted(offsets, element, side="right") - 1
+    position = np.searchsorted(held, element, side="right")  # held nodes at or before the start
+    first, last = offsets[bar], offsets[bar + 1] - 1
+    left_held = (position > 0) & (held[np.maximum(position - 1, 0)] >= first)
+    right_held = (position < held.size) & (held[np.minimum(position, held.size - 1)] <= last)
+    run = position * len(layout.scene.bars) + bar
+    starts = np.flatnonzero(np.r_[True, run[1:] != run[:-1]])
+    ends = np.r_[starts[1:], run.size]
+    size = np.diff(np.r_[starts, run.size])
+    before_bar = np.where(first > 0, outside[np.maximum(first - 1, 0)], 0.0)
+    after_bar = outside[last]
+    # c per run: weighted mean (held at both ends), the free end's cut residual otherwise
+    both = left_held[starts] & right_held[starts]
+    mean = np.add.reduceat(r * flexibility, starts) / np.add.reduceat(flexibility, starts)
+    c_run = np.where(both, mean, np.where(left_held[starts], after_bar[starts], before_bar[starts]))
+    c = np.repeat(c_run, size)
+    elongation = (c - r) * flexibility
+    total = np.cumsum(elongation)
+    base = np.repeat(total[starts] - elongation[starts], size)  # the sum before each run
+    from_left = total - base  # displacement of each element's end node, from the left end
+    tail_end = np.repeat(total[ends - 1], size)
+    from_right = tail_end - total + elongation  # of each element's start node, from the right
+    anchored_left = np.repeat(left_held[starts], size)
+    sway = largest(np.where(anchored_left, from_left, from_right))
+    # force error at each held node: the jump of c between the elements on either side of it
+    # (past a bar's end, the cut residual there)
+    held_bar = np.searchsorted(offsets, held, side="right") - 1
+    start, end = offsets[held_bar], offsets[held_bar + 1] - 1
+    at = np.searchsorted(element, np.r_[held - 1, held].clip(0, element[-1]))
+    c_at = c[np.minimum(at, c.size - 1)]
+    c_left = np.where(held > start, c_at[: held.size],
+                      np.where(start > 0, outside[np.maximum(start - 1, 0)], 0.0))
+    c_right = np.where(held < end, c_at[held.size:], outside[end])
+    return largest(c_left - c_right), sway
+
+
+def _contact_give(layout: Layout, held: np.ndarray, pushing: np.ndarray) -> float:
+    """The largest 1/(s_a + s_b) (m/N) over the pushing bar contacts: how far a unit force
+    error moves the two ends of a contact together, s_a and s_b the stiffness each end sees
+    in its own bar with the other held nodes fixed (a supported end does not move)."""
+    n_walls = len(layout.scene.walls)
+    give = 0.0
+    for i, c in enumerate(layout.scene.contacts):
+        if not pushing[n_walls + i]:
+            continue
+        ends = np.array([layout.node(c.bar_a, c.node_a),
+                         layout.node(c.bar_b, c.node_b)])
+        if np.isin(ends, layout.support_nodes).any():
+            continue
+        stiffness = seen_stiffness(layout, np.setdiff1d(held, ends), ends)
+        give = max(give, 1.0 / float(stiffness.sum()))
+    return give
+
+
+def gap_moves(layout: Layout, held: np.ndarray, nodes: np.ndarray, delta: np.ndarray,
+              pushing: np.ndarray) -> tuple[float, float, tuple[np.ndarray, np.ndarray]]:
+    """What moving the contact nodes ``nodes`` by ``delta`` (m) with the other held nodes fixed
+    does: (the largest force change at a held node, N; the largest move, m; each held node's
+    move). A node moved by δ
+    between held neighbours at compliances c_l and c_r changes its own force by
+    δ(1/c_l + 1/c_r) and each neighbour's by δ/c. The two ends of a pushing bar contact move
+    together: each moves by its own δ and the other end's. A moved node that is not held (an
+    open contact that penetrates) counts as held."""
+    moving = np.unique(np.concatenate((held, nodes[delta > 0.0])))
+    if moving.size == 0:
+        return 0.0, 0.0, (moving, np.zeros(0))
+    by_node = np.zeros(moving.size)
+    listed = np.isin(nodes, moving)
+    np.maximum.at(by_node, np.searchsorted(moving, nodes[listed]), delta[listed])
+    n_walls = len(layout.scene.walls)
+    tied = [(int(np.searchsorted(moving, layout.node(c.bar_a, c.node_a))),
+             int(np.searchsorted(moving, layout.node(c.bar_b, c.node_b))))
+            for i, c in enumerate(layout.scene.contacts) if pushing[n_walls + i]]
+    if tied:  # every node of a chain of tied nodes moves by up to the sum of their moves
+        group = list(range(moving.size))
+
+        def root(i: int) -> int:
+            while group[i] != i:
+                i = group[i]
+            return i
+
+        for a, b in tied:
+            group[root(a)] = root(b)
+        members = np.array([root(i) for i in range(moving.size)])
+        by_node = np.bincount(members, by_node, minlength=moving.size)[members]
+    bar = np.searchsorted(layout.node_offsets, moving, side="right") - 1
+    same = bar[1:] == bar[:-1]
+    with np.errstate(divide="ignore"):
+        link = np.where(same, 1.0 / np.diff(layout.compliance[moving]), 0.0)  # 1/c to the next
+    to_left, to_right = np.r_[0.0, link], np.r_[link, 0.0]
+    shifted_left, shifted_right = np.r_[0.0, by_node[:-1]], np.r_[by_node[1:], 0.0]
+    change = (by_node * (to_left + to_right) + shifted_left * to_left + shifted_right * to_right)
+    return largest(change), largest(by_node), (moving, by_node)
+
+
+def _closing(layout: Layout, moves: tuple[np.ndarray, np.ndarray], row_nodes: np.ndarray,
+             rows: np.ndarray, stand_off: np.ndarray, s: np.ndarray) -> float:
+    """The largest force an open contact would take if the held nodes at the ends of its run
+    moved as ``moves`` says ((sorted nodes, move of each, m)): (move − its stand-off)⁺ × the
+    stiffness it sees."""
+    held, shift = moves
+    if held.size == 0 or not np.isfinite(stand_off).any():
+        return 0.0
+    bar = np.searchsorted(layout.node_offsets, row_nodes, side="right") - 1
+    held_bar = np.searchsorted(layout.node_offsets, held, side="right") - 1
+    after = np.searchsorted(held, row_nodes, side="right")
+    left, right = np.maximum(after - 1, 0), np.minimum(after, held.size - 1)
+    induced = np.maximum(np.where((after > 0) & (held_bar[left] == bar), shift[left], 0.0),
+                         np.where((after < held.size) & (held_bar[right] == bar), shift[right],
+                                  0.0))
+    per_row = np.zeros(stand_off.size)
+    np.maximum.at(per_row, rows, induced)
+    return largest(np.maximum(per_row - stand_off, 0.0) * np.where(np.isfinite(stand_off), s, 0.0))
+
+
+def row_stiffness(layout: Layout, held: np.ndarray, pushing: np.ndarray,
+                  ends: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """The stiffness (N/m) each contact row sees with the supports and ``held`` nodes fixed:
+    a wall, its node's (:func:`seen_stiffness`); a bar contact, its two nodes' in series (an
+    end held by a support or by a ``pushing`` wall is rigid: only the other end moves; both
+    held, neither counts as rigid). With
+    ``ends``, also the stiffness of each end (per nonzero of :attr:`Scene.contact_rows`)."""
+    rows, row_nodes, _, gaps = layout.rows
+    node_stiffness = seen_stiffness(layout, held, row_nodes)
+    n_walls = len(layout.scene.walls)
+    rigid = np.concatenate((layout.support_nodes, row_nodes[:n_walls][pushing[:n_walls]]))
+    fixed = (rows >= n_walls) & np.isin(row_nodes, rigid)
+    # both ends held: the contact closes only as a wall gives, at that end's own stiffness
+    fixed &= np.bincount(rows[fixed], minlength=gaps.size)[rows] < 2
+    node_stiffness[fixed] = np.inf
+    with np.errstate(divide="ignore"):
+        row = 1.0 / np.bincount(rows, 1.0 / node_stiffness, minlength=gaps.size)
+    return (row, node_stiffness) if ends else row
+
+
+def _both_sides(layout: Layout, lam: np.ndarray) -> float:
+    """The largest common part of contact forces that oppose each other (N): a node cannot be
+    pushed from both sides at once, whatever the gaps (walls on both sides of it); nor can a
+    loop of walls and bar contacts whose gaps sum to zero carry a force all the way round.
+    min(Σλ₊, Σλ₋) at a node, and the smallest force around such a loop, is a set of forces
+    that moves nothing and is wrong in every row it is on (where the gaps leave the nodes one
+    position, the rows alone cannot tell how the force splits; the exact answer has one row of
+    each loop free of it)."""
+    rows, nodes, coefficients, gaps = layout.rows
+    force = np.maximum(lam, 0.0)
+    free = ~np.isin(nodes, layout.support_nodes)
+    entries = np.bincount(rows[free], minlength=gaps.size)
+    single = free & (entries[rows] == 1)  # a wall, or a contact with one end held
+    plus = np.zeros(layout.n_nodes)
+    minus = np.zeros(layout.n_nodes)
+    np.add.at(plus, nodes[single & (coefficients > 0)], force[rows[single & (coefficients > 0)]])
+    np.add.at(minus, nodes[single & (coefficients < 0)], force[rows[single & (coefficients < 0)]])
+    common = largest(np.minimum(plus, minus))
+    for cycle in layout.tight_cycles:  # loops through bar contacts (Layout.tight_cycles)
+        common = max(common, float(force[list(cycle)].min()))
+    return common
