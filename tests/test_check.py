@@ -1,7 +1,7 @@
-"""The independent check: hand-made right and wrong answers, and the Result's JSON.
+"""The independent check (contactqp.check): hand-made right and wrong answers.
 
 The scene is small enough to solve by hand. A cantilever of two 1 m elements, E = 200 GPa,
-areas 1e-3 and 5e-4 m², so k_0 = 2e8 N/m and k_1 = 1e8 N/m, and the tip's flexibility
+areas 1e-3 and 5e-4 m², so k_0 = 2e8 N/m and k_1 = 1e8 N/m, and the tip's compliance
 f_2 = 1/k_0 + 1/k_1 = 1.5e-8 m/N. A "+" wall 0.15 mm beyond the tip (node 2), so g / f_2 = 1e4 N.
 
 With F = 30 kN at the tip, the tip reaches the wall and λ = F − g/f_2 = 20 kN: both elements
@@ -10,7 +10,6 @@ carry F − λ = 10 kN, u = [0, 0.05, 0.15] mm, and the support pulls back with 
 
 from __future__ import annotations
 
-import json
 import math
 
 import numpy as np
@@ -19,25 +18,22 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import contactqp
-from contactqp import TOLERANCES, Bar, Load, Scene, Support, Tolerances, Wall
-from contactqp.result import section_residual
+from closed_forms import (
+    HAND_GAP,
+    hand_scene,
+)
+from contactqp import (
+    TOLERANCES,
+    Tolerances,
+)
+from contactqp.check import section_residual
 
-GAP = 1.5e-4  # m
 U_CONTACT = [0.0, 5e-5, 1.5e-4]  # m: 10 kN through k_0 = 2e8 N/m, then through k_1 = 1e8 N/m
-
-
-def hand_scene(force: float = 3e4, gap: float = GAP) -> Scene:
-    bar = Bar.from_areas([1e-3, 5e-4], 2e11, lengths=[1.0, 1.0])
-    return Scene(bar, (Support(0),), (Load(2, force),), (Wall(2, gap, "+"),))
 
 
 def run_check(scene, u, contact_force, reactions, contact="inequality", **kwargs):
     return contactqp.check(scene, np.array(u, dtype=float), np.array(contact_force, dtype=float),
                            np.array(reactions, dtype=float), contact, **kwargs)
-
-
-# --------------------------------------------------------------------------------------------
-# Right answers
 
 
 @pytest.mark.parametrize("contact", ["inequality", "equality"])
@@ -59,14 +55,10 @@ def test_open_gap_with_no_force_is_verified():
 def test_library_solution_of_the_hand_scene_is_the_hand_solution():
     result = contactqp.solve(hand_scene())
     # κ(K) ~ 10: a direct solve reproduces the hand numbers to a few ulp
-    np.testing.assert_allclose(result.u, U_CONTACT, rtol=1e-12, atol=1e-12 * GAP)
+    np.testing.assert_allclose(result.u, U_CONTACT, rtol=1e-12, atol=1e-12 * HAND_GAP)
     np.testing.assert_allclose(result.contact_force, [2e4], rtol=1e-12)  # as above
     np.testing.assert_allclose(result.reactions, [-1e4], rtol=1e-12)  # as above
     assert result.verified
-
-
-# --------------------------------------------------------------------------------------------
-# Wrong answers
 
 
 def test_perturbed_displacement_fails_equilibrium():
@@ -142,21 +134,6 @@ def test_force_across_an_open_gap_fails_complementarity():
     assert found.residuals["complementarity"] == pytest.approx(1.0 / 9.0, rel=1e-12)  # ulps
 
 
-def test_seen_stiffness_holds_the_supports_and_the_pushing_walls():
-    from contactqp.result import seen_stiffness
-
-    k = 2e11 * 1e-3 / 0.25  # four equal elements of EA/L = 8e8 N/m
-    one = Scene(Bar.from_areas([1e-3] * 4, 2e11, length=1.0), (Support(0),))
-    # node 2 held: node 2 itself sees the two elements to the support in series (k/2), node 3
-    # one element back to node 2 and a free end (k), node 1 one element each way (2k)
-    assert seen_stiffness(one, np.array([2]), np.array([1, 2, 3, 4])) == pytest.approx(
-        [2 * k, k / 2, k, k / 2], rel=1e-12)
-    # a second bar is not a neighbour: its support holds only its own nodes
-    two = Scene((one.bar, one.bar), (Support(0), Support(0, bar=1)))
-    assert seen_stiffness(two, np.array([], dtype=int), np.array([4, 6])) == pytest.approx(
-        [k / 4, k], rel=1e-12)  # bar 1 node 1: one element from its support
-
-
 def test_open_gap_fails_equality_feasibility():
     found = run_check(hand_scene(force=5e3), [0.0, 2.5e-5, 7.5e-5], [0.0], [-5e3], "equality")
     assert not found.verified
@@ -182,34 +159,6 @@ def test_nan_contact_force_is_not_called_physical():
     assert "not finite" in found.message and "()" not in found.message
 
 
-# --------------------------------------------------------------------------------------------
-# The Result as JSON
-
-
-@pytest.mark.parametrize("method", ["lagrange", "penalty"])
-@pytest.mark.parametrize("contact", ["inequality", "equality"])
-def test_result_to_json(method, contact):
-    result = contactqp.solve(hand_scene(), method, contact)
-    data = json.loads(result.to_json())
-    for key in ("u", "contact_force", "reactions", "penetration", "verified", "residuals",
-                "method", "time"):
-        assert key in data
-    assert data["method"] == method
-    assert data["contact"] == contact
-    assert data["u"] == result.u.tolist()  # JSON round-trips a float exactly
-    assert data["contact_force"] == result.contact_force.tolist()
-    assert data["reactions"] == result.reactions.tolist()
-    assert data["penetration"] == result.penetration.tolist()
-    assert data["verified"] is result.verified is True
-    assert set(data["residuals"]) == {"equilibrium", "feasibility", "complementarity", "sign",
-                                      "force", "displacement"}
-    assert data["force_error_bound"] == result.force_error_bound
-    if contact == "equality":
-        assert data["residuals"]["complementarity"] is None
-    assert isinstance(data["time"], float) and data["time"] >= 0.0
-    assert data == result.to_dict()
-
-
 @settings(max_examples=200, deadline=None)
 @given(st.integers(2, 12).flatmap(lambda n: st.tuples(
     st.just(n),
@@ -226,3 +175,4 @@ def test_section_residual_is_the_largest_cut(case):
     expected = np.abs(sections).max()
     assert section_residual(np.array(forces), nodes, values) == pytest.approx(
         expected, rel=1e-12, abs=1e-9)
+

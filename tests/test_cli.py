@@ -1,6 +1,7 @@
-"""The command line end to end: the main job, solve --json, penalty-sweep, and bad input.
+"""The command line end to end (contactqp.cli): the main job, solve --json, penalty-sweep, curve,
+bad input, exit statuses and units.
 
-Glossary: F load (N) at node 2, g gap (m), f flexibility Σ L/(EA) from the support to the wall
+Glossary: F load (N) at node 2, g gap (m), f compliance Σ L/(EA) from the support to the wall
 node (m/N), f₂ the same up to the load node, λ = (F f₂ − g) / f the contact force (N).
 """
 
@@ -13,9 +14,10 @@ import sys
 
 import pytest
 
+import contactqp
+from closed_forms import GAP, SEED, E, F
 from contactqp.cli import main
 
-E, F, GAP = 210e9, 565486.67, 1e-4
 DIAMETERS_MID = [0.0375, 0.0325, 0.0275, 0.0225]  # m, mid-length of 40 → 20 mm over 4 elements
 
 
@@ -28,6 +30,47 @@ def run(capsys, *argv: str) -> tuple[int, str, str]:
     code = main(list(argv))
     out, err = capsys.readouterr()
     return code, out, err
+
+
+GOOD = {
+    "material": "[material]\nyoungs_modulus = 1e9\n",
+    "bar": "[bar]\nlength = 1.0\nareas = [1e-3, 1e-3]\n",
+    "support": "[[support]]\nnode = 0\n",
+}
+
+
+BAD_SCENES = [  # (part replaced or added, its bad text, what the error line must name)
+    ("material", "[material]\nyoungs_modulus = -1.0\n", "material.youngs_modulus"),
+    ("material", "[material]\nyoungs_modulus = nan\n", "material.youngs_modulus"),
+    ("bar", "[bar]\nlength = 1.0\nareas = [1e-3, 0.0]\n", "bar.areas[1]"),
+    ("bar", "[bar]\nlength = inf\nareas = [1e-3]\n", "bar.length"),
+    ("bar", "[bar\nlength = 1.0\n", "not valid TOML"),
+    ("support", "", "no support"),
+    ("support", "[[support]]\nnode = 3\n", "support[0].node = 3"),
+    ("load", "[[load]]\nnode = 7\nforce = 1.0\n", "load[0].node = 7"),
+    ("wall", "[[wall]]\nnode = 5\ngap = 0.0\n", "wall[0].node = 5"),
+    ("wall", "[[wall]]\nnode = 1\ngap = 'near'\n", "wall[0].gap"),
+]
+
+
+BAD_FILES = [  # (a scene file, words of the one error line)
+    (("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = ['1e-3']\n"
+     "[[support]]\nnode = 0\n"), ["bar.areas[0]", "'1e-3'"]),
+    (("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [true]\n"
+     "[[support]]\nnode = 0\n"), ["bar.areas[0]", "True"]),
+    (("[material]\nyoungs_modulus = true\n[bar]\nlength = 1.0\nareas = [1e-3]\n"
+     "[[support]]\nnode = 0\n"), ["youngs_modulus", "True"]),
+    (("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nelements = 1000000000000\n"
+     "section = { shape = 'circle', diameter_start = 0.04, diameter_end = 0.02 }\n"
+     "[[support]]\nnode = 0\n"), ["bar.elements"]),
+    (("units = 'cm'\n[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [1e-3]\n"
+     "[[support]]\nnode = 0\n"), ["units", "'cm'"]),
+    (("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [1e-3]\n"
+     "[[support]]\nnode = 0\n[[load]]\nnode = 1\nforce = 1e308\n"), ["load[0].force"]),
+    (("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\nareas = [1e-3, 1e-3]\n"
+     "[[support]]\nnode = 0\n[[wall]]\nnode = 1\ngap = 1e-4\nside = '+'\n"
+     "[[wall]]\nnode = 1\ngap = -2e-4\nside = '-'\n"), ["wall[0]", "wall[1]", "node 1"]),
+]
 
 
 def test_main_job_prints_every_method_and_writes_charts(capsys, tmp_path):
@@ -116,25 +159,6 @@ def test_penalty_sweep_json_converges_then_loses_digits(capsys):
     assert data["verified"][data["penalty"].index(1e14)] is True
 
 
-GOOD = {
-    "material": "[material]\nyoungs_modulus = 1e9\n",
-    "bar": "[bar]\nlength = 1.0\nareas = [1e-3, 1e-3]\n",
-    "support": "[[support]]\nnode = 0\n",
-}
-BAD_SCENES = [  # (part replaced or added, its bad text, what the error line must name)
-    ("material", "[material]\nyoungs_modulus = -1.0\n", "material.youngs_modulus"),
-    ("material", "[material]\nyoungs_modulus = nan\n", "material.youngs_modulus"),
-    ("bar", "[bar]\nlength = 1.0\nareas = [1e-3, 0.0]\n", "bar.areas[1]"),
-    ("bar", "[bar]\nlength = inf\nareas = [1e-3]\n", "bar.length"),
-    ("bar", "[bar\nlength = 1.0\n", "not valid TOML"),
-    ("support", "", "no support"),
-    ("support", "[[support]]\nnode = 3\n", "support[0].node = 3"),
-    ("load", "[[load]]\nnode = 7\nforce = 1.0\n", "load[0].node = 7"),
-    ("wall", "[[wall]]\nnode = 5\ngap = 0.0\n", "wall[0].node = 5"),
-    ("wall", "[[wall]]\nnode = 1\ngap = 'near'\n", "wall[0].gap"),
-]
-
-
 @pytest.mark.parametrize(("part", "text", "expected"), BAD_SCENES)
 def test_bad_scene_files_exit_2_with_one_line(capsys, tmp_path, part, text, expected):
     path = tmp_path / "bad.toml"
@@ -173,7 +197,106 @@ def test_solvers_lists_installed_pairs_and_install_hints(capsys, monkeypatch):
     assert code == 0
     installed = [f"{r.backend}/{r.solver}" for r in qp.available_qp_solvers() if r.available]
     assert installed and all(pair in out for pair in installed)
-    monkeypatch.setitem(qp.BACKENDS, "osqp", None)  # as if osqp were not installed
+    monkeypatch.setitem(qp._LOADED, "osqp", None)  # as if osqp were not installed
     code, out, _ = run(capsys, "solvers")
     line = next(row for row in out.splitlines() if row.startswith("osqp/"))
     assert " no " in line and "pip install" in line
+
+
+@pytest.mark.parametrize(("text", "words"), BAD_FILES)
+def test_bad_scene_files_are_one_line_and_exit_2(capsys, tmp_path, text, words):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    code = main(["solve", str(path)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+    for word in words:
+        assert word in err, err
+
+
+def test_an_impossible_scene_file_exits_2_from_compare(capsys, tmp_path):
+    path = tmp_path / "impossible.toml"
+    path.write_text(BAD_FILES[-1][0])
+    code = main(["compare", str(path), "--no-charts"])
+    _, err = capsys.readouterr()
+    assert code == 2 and "no position" in err and "Traceback" not in err
+
+
+def test_solve_exits_1_when_the_answer_fails_its_check(capsys):
+    code = main(["solve", "--method", "penalty", "--penalty", "1e8"])
+    out, err = capsys.readouterr()
+    assert code == 1
+    assert "not verified" in err and "residual" in err and len(err.strip().splitlines()) == 1
+    assert "NO" in out  # the table still shows the answer
+
+
+def test_solve_exits_0_when_verified(capsys):
+    assert main(["solve", "--method", "penalty"]) == 0
+
+
+def test_studies_exit_0_with_failing_rows_and_say_so(capsys):
+    assert main(["penalty-sweep"]) == 0  # ε = 1 fails its check on purpose
+    out, _ = capsys.readouterr()
+    assert "NO" in out
+    with pytest.raises(SystemExit):
+        main(["compare", "--help"])
+    assert "exit status 0 when the table is produced" in capsys.readouterr().out
+
+
+def test_an_unexpected_error_is_one_line_and_exit_3(capsys, monkeypatch):
+    from contactqp import cli
+
+    def broken(*args, **kwargs):
+        raise ZeroDivisionError("float division by zero")
+
+    monkeypatch.setattr(cli, "solve", broken)
+    code = main(["solve"])
+    _, err = capsys.readouterr()
+    assert code == 3 and len(err.strip().splitlines()) == 1
+    assert "internal error: ZeroDivisionError" in err and "bug" in err
+    assert "Traceback" not in err
+
+
+def test_help_documents_the_exit_statuses(capsys):
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    out = capsys.readouterr().out
+    assert all(f"{code}:" in out for code in (0, 1, 2, 3))
+
+
+def test_what_is_printed_and_written_is_in_the_scenes_units(capsys, tmp_path):
+    path = tmp_path / "mm.toml"
+    path.write_text(contactqp.scene_to_toml(contactqp.convert_units(SEED, "mm-N-MPa")))
+    assert main(["solve", str(path), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["units"] == "mm-N-MPa"
+    assert data["penetration"][0] == pytest.approx(
+        contactqp.solve(SEED).penetration[0] * 1e3, abs=1e-12)
+    assert main(["solve", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "penetration (mm)" in out and "contact force (N)" in out
+    assert main(["penalty-sweep", str(path), "--no-charts"]) == 0
+    out = capsys.readouterr().out
+    assert "ε (N/mm)" in out and "N/mm (force error" in out
+
+
+def test_curve_cli_json(capsys):
+    assert main(["curve", "--steps", "4", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["load_factor"] == pytest.approx([0, 1 / 3, 2 / 3, 1])
+    for name in ("lagrange", "equality", "penalty", "qp"):
+        entry = data["methods"][name]
+        assert len(entry["load_point_displacement"]) == 4
+        assert [len(row) for row in entry["contact_force"]] == [1] * 4
+        assert [len(row) for row in entry["penetration"]] == [1] * 4
+    assert main(["curve", "--steps", "1"]) == 2
+    assert "steps must be a whole number >= 2" in capsys.readouterr().err
+
+
+def test_curve_cli_table_and_chart(tmp_path, capsys):
+    assert main(["curve", "--steps", "3", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "first contact closes at t = 0.0703" in out
+    assert (tmp_path / "load_path.png").stat().st_size > 0
+

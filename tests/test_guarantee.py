@@ -23,14 +23,20 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import contactqp
+from closed_forms import (
+    runs,
+)
 from contactqp.random_scenes import random_scene
-from contactqp.reference import reference
+from contactqp.reference import (
+    reference,
+)
 
-QP_PAIRS = [(s.backend, s.solver) for s in contactqp.available_qp_solvers() if s.available]
 # The reference is exact to ~1e-13 of F and U (extended precision over at most a few dozen
 # elements; exact for the rational path), and a bound computed in double precision from sums
 # over as many elements rounds at ~1e-14: 1e-12 covers both.
 ROUND_OFF = 1e-12
+
+
 # The bounds are exact to first order within an answer's pushing contacts on one bar; across
 # bars tied by contacts, and where ill-conditioning makes the residuals themselves uncertain,
 # they are estimates: over 52 700 runs on 1700 scenes (benchmarks/guarantee.py, seeds 2026 and
@@ -38,19 +44,6 @@ ROUND_OFF = 1e-12
 # default penalty, three bars chained by two contacts). The guarantee itself (GUARANTEE) was
 # never exceeded (the largest error of those 41: 5.2e-6).
 BOUND_FACTOR = 5.0
-
-
-def runs(rng: np.random.Generator) -> list[tuple[str, dict, str]]:
-    """(method, options, formulation) for every method and every installed QP solver."""
-    out = [("lagrange", {}, f) for f in ("full", "condensed", "strain")]
-    out += [("penalty", {}, f) for f in ("full", "condensed")]
-    out += [("augmented", {}, f) for f in ("full", "condensed")]
-    for backend, solver in QP_PAIRS:
-        out.append(("qp", {"backend": backend, "solver": solver,
-                           "accuracy": str(rng.choice(["default", "high"])),
-                           "scale": bool(rng.random() < 0.8)},
-                    str(rng.choice(["full", "condensed", "strain"]))))
-    return out
 
 
 def solve_quietly(scene, method, options, formulation):
@@ -143,6 +136,8 @@ def test_the_issue_penalty_scene_is_flagged():
     # λ_ε = P·ε/(ε + k₀): the wall node as a spring k₀ behind the penalty spring
     assert textbook.contact_force[0] == pytest.approx(1.1e6 * 1e14 / (1e14 + k0), rel=1e-9)
     assert not textbook.verified and "feasibility" in textbook.message
-    default = contactqp.solve(scene, "penalty")  # ε = 1e8 x the stiffness the wall sees
+    default = contactqp.solve(scene, "penalty")  # ε = 1e6 x the stiffness the wall sees, k₀
     assert default.verified
-    assert default.contact_force[0] == pytest.approx(1.1e6, rel=2e-8)  # s/ε = 1e-8
+    # the same closed form at ε = 1e6·k₀: 1.1e6 / (1 + 1e-6), a few ulp of round-off
+    assert default.contact_force[0] == pytest.approx(1.1e6 * 1e6 / (1e6 + 1.0), rel=1e-12)
+

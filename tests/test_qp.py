@@ -1,4 +1,4 @@
-"""The QP method: every installed backend and solver against the explicit Lagrange method and
+"""The QP method (contactqp.methods.qp): every installed backend and solver against the explicit Lagrange method and
 against equilibrium computed here from the displacements alone.
 
 Symbols
@@ -6,91 +6,56 @@ Symbols
 u      nodal displacements (m); N = (EA/L)·Δu the element forces (N, tension positive)
 λ      contact force of each wall (N), > 0 when the wall pushes the bar (L = Π + λᵀ(C D − g))
 F_ref  the force scale of a comparison: the largest of |λ_ref| and the loads (N)
+
+Also: its settings table, and that no solver prints.
 """
 
 from __future__ import annotations
 
-import math
+import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import contactqp
-from contactqp import Bar, Load, Scene, Support, Wall
-from contactqp.errors import OptionError, SolverNotAvailable
+from closed_forms import (
+    INSTALLED_SOLVERS,
+    PAIRS,
+    QP_SOLVERS,
+    SCENES,
+    SEED,
+    SOC_REWRITE,
+    both_sides,
+    force_rtol,
+    open_gap,
+    require,
+    several_walls,
+)
+from contactqp import (
+    Bar,
+    Load,
+    OptionError,
+    Scene,
+    Support,
+    Wall,
+)
+from contactqp.errors import SolverNotAvailable
 from contactqp.methods import qp as qpmod
+from contactqp.model import (
+    Layout,
+    build_model,
+)
 
-SOLVERS = contactqp.available_qp_solvers()
-PAIRS = [pytest.param(r, id=f"{r.backend}-{r.solver}") for r in SOLVERS]
 CONTACTS = ("inequality", "equality")
-# Solvers that see the QP through cvxpy's or qpsolvers' second-order-cone rewrite of the
-# objective (t >= ‖Lx‖²): a tolerance ε on that problem leaves an error ~√ε in x and λ.
-SOC_REWRITE = {("cvxpy", "ECOS"), ("cvxpy", "CVXOPT"), ("qpsolvers", "ecos")}
-TOLERANCE_KEYS = ("eps_abs", "tol_feas", "abstol", "primal_tol", "primal_feasibility_tolerance")
-
-
-def force_rtol(backend: str, solver: str) -> float:
-    """Relative error in λ that accuracy="high" allows (the tests' tolerance for a solver).
-
-    The scaled QP and its multipliers are O(1) (see contactqp.methods.qp), so a solver that
-    stops at residual ε leaves λ/F off by about ε times the condition number of the scaled
-    KKT system, below 1e2 for the scenes here: rtol = 1e3·ε, and 1e-9 for an exact active-set
-    method (ε = round-off). Through a cone rewrite, 10·√ε (SOC_REWRITE).
-    """
-    settings = qpmod.accuracy_settings(solver, "high", backend=backend)
-    eps = min((settings[k] for k in TOLERANCE_KEYS if k in settings), default=1e-12)
-    if (backend, solver) in SOC_REWRITE:
-        return 10.0 * math.sqrt(eps)
-    return max(1e3 * eps, 1e-9)
-
-
-def require(row: contactqp.methods.qp.QPSolverInfo) -> None:
-    if not row.available:
-        pytest.skip(f"{row.backend}/{row.solver} is not installed: {row.install}")
-
-
-def several_walls() -> Scene:
-    """Six elements fixed at node 0, pushed and pulled: walls on both sides, one open."""
-    bar = Bar.from_areas([4e-4, 4e-4, 3e-4, 3e-4, 2e-4, 2e-4], 200e9, length=1.2)
-    loads = (Load(2, 3.0e5), Load(4, -1.0e5), Load(6, 2.0e5))
-    walls = (
-        Wall(2, 5e-4, "+"),   # closed: node 2 is pushed past 0.5 mm
-        Wall(4, 2e-3, "-"),   # open: far behind node 4
-        Wall(6, 1.5e-3, "+"),  # closed
-        Wall(5, 5e-3, "+"),   # open
-    )
-    return Scene(bar, (Support(0),), loads, walls, name="several walls")
-
-
-def both_sides() -> Scene:
-    """Walls on both sides of one node (inequality only) and a second support at the end."""
-    bar = Bar.from_areas([5e-4] * 5, 200e9, length=1.0)
-    loads = (Load(2, -4.0e5), Load(3, 2.0e5))
-    walls = (Wall(2, 3e-4, "+"), Wall(2, 2e-4, "-"), Wall(3, 1e-4, "+"))
-    return Scene(bar, (Support(0), Support(5)), loads, walls, name="both sides")
-
-
-def open_gap() -> Scene:
-    """The default scene with the wall 5 mm away: the free tip moves 0.98 mm, the gap stays
-    open."""
-    seed = contactqp.seed_scene()
-    return seed.with_walls((Wall(seed.walls[0].node, 5e-3, "+"),))
-
-
-SCENES = {
-    "seed": contactqp.seed_scene,
-    "several_walls": several_walls,
-    "both_sides": both_sides,
-    "open_gap": open_gap,
-}
 
 
 def equilibrium_contact_forces(scene: Scene, u: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
     """The force the walls put on each walled node (N, +x), from u alone: the element forces
     on either side and the load there. Compared with the walls' −sign·λ summed per node."""
-    k = scene.bar.youngs_modulus * scene.bar.areas / scene.bar.lengths
+    k = scene.bars[0].youngs_modulus * scene.bars[0].areas / scene.bars[0].lengths
     N = np.concatenate(([0.0], k * np.diff(u), [0.0]))  # element forces, 0 past the ends
-    loads = scene.nodal_loads()
+    loads = Layout(scene).nodal_loads
     from_u, from_lambda = {}, {}
     for wall, lam in zip(scene.walls, contact_force):
         node = wall.node
@@ -101,14 +66,82 @@ def equilibrium_contact_forces(scene: Scene, u: np.ndarray, contact_force: np.nd
     return np.array([from_u[n] for n in nodes]), np.array([from_lambda[n] for n in nodes])
 
 
-# ---------------------------------------------------------------------------------------------
-# Every backend and solver against Lagrange and equilibrium
-
-
 # every scene with both kinds of contact, except equality at walls on both sides of one node
 # (impossible: test_equality_at_two_walls_of_one_node)
 CASES = [(name, contact) for contact in CONTACTS for name in SCENES
          if not (contact == "equality" and name == "both_sides")]
+
+
+BACKEND_ROWS = [pytest.param(b, id=b) for b in qpmod.BACKENDS]
+
+
+def long_bar(elements: int = 1000) -> Scene:
+    """The default scene cut into ``elements`` equal elements (load at mid-length, wall at the
+    tip): K reaches 2e11 N/m."""
+    seed = contactqp.default_scene()
+    bar = Bar.tapered_circle(1.0, elements, 0.040, 0.020, 210e9)
+    return Scene(bar, (Support(0),), (Load(elements // 2, seed.loads[0].force),),
+                 (Wall(elements, seed.walls[0].gap, "+"),), name=f"{elements} elements")
+
+
+WRONG_BUT_CLAIMED = [
+    # HiGHS in SI units on the default scene: the wall node stays at u = 0 with "optimal";
+    # 7.6 % off in λ (measured, highspy 1.x through both front ends)
+    pytest.param("qpsolvers", "highs", contactqp.default_scene, "complementarity",
+                 id="qpsolvers-highs-seed"),
+    pytest.param("cvxpy", "HIGHS", contactqp.default_scene, "complementarity", id="cvxpy-HIGHS-seed"),
+    # QPALM at its own default tolerance (1e-4) in SI units: the tip 1.3 % past the wall
+    pytest.param("qpsolvers", "qpalm", contactqp.default_scene, "feasibility",
+                 id="qpsolvers-qpalm-seed"),
+    # OSQP at its default tolerance (1e-3) in SI units on 1000 elements: "solved", with an
+    # equilibrium residual of 1e-3 (scaled, the same settings pass)
+    pytest.param("osqp", "osqp", long_bar, "equilibrium", id="osqp-1000-elements"),
+]
+
+
+def test_strain_qp_data():
+    """x = [u; e]: Hessian diag(0, k_e/k), ties B u − e = 0; at the Lagrange solution the
+    scaled KKT conditions hold with the tie multipliers = element forces / F."""
+    scene = contactqp.default_scene()
+    reference = contactqp.solve(scene)
+    qp = contactqp.qp_problem(scene, formulation="strain")
+    n, m = 4, 4
+    k = scene.bars[0].youngs_modulus * scene.bars[0].areas / scene.bars[0].lengths
+    stiffness_scale = qp.force_scale / qp.displacement_scale
+    assert qp.K.toarray() == pytest.approx(np.diag(np.concatenate((np.zeros(n), k))) / stiffness_scale)
+    u = reference.u[1:]
+    e = np.diff(reference.u)
+    x = np.concatenate((u, e)) / qp.displacement_scale
+    assert np.abs(qp.ties @ x).max() < 1e-12 * np.abs(x).max()
+    mu = np.concatenate((k * e, reference.contact_force)) / qp.force_scale
+    stationarity = qp.K @ x + qp.q + qp.rows().T @ mu
+    assert np.abs(stationarity).max() < 1e-9
+    assert qp.n == n + m and qp.n_displacements == n and qp.n_ties == m
+
+
+def test_unknown_qp_formulation_names_the_value():
+    with pytest.raises(contactqp.OptionError, match="'weak'"):
+        qpmod.qp_from_model(build_model(contactqp.default_scene()), formulation="weak")
+
+
+@pytest.mark.parametrize("info", INSTALLED_SOLVERS, ids=[f"{s.backend}-{s.solver}" for s in INSTALLED_SOLVERS])
+def test_no_solver_prints_anything(capfd, info):
+    """On an open gap (OSQP's "Polishing not needed") and on the default scene, at both
+    accuracies, through file descriptors 1 and 2 (C code included)."""
+    for scene in (SEED.with_walls((Wall(4, 2e-3),)), SEED):
+        for accuracy in ("default", "high"):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # Python warnings are not printing
+                contactqp.solve(scene, "qp", backend=info.backend, solver=info.solver,
+                                accuracy=accuracy)
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+
+
+def test_verbose_lets_the_solver_talk(capfd):
+    contactqp.solve(SEED, "qp", backend="osqp", verbose=True)
+    out, _ = capfd.readouterr()
+    assert "OSQP" in out
 
 
 @pytest.mark.parametrize("row", PAIRS)
@@ -120,7 +153,7 @@ def test_dual_is_the_contact_force(row, scene_name, contact):
     result = contactqp.solve(scene, method="qp", contact=contact, backend=row.backend,
                              solver=row.solver, accuracy="high")
     rtol = force_rtol(row.backend, row.solver)
-    force_scale = max(np.abs(reference.contact_force).max(), np.abs(scene.nodal_loads()).max())
+    force_scale = max(np.abs(reference.contact_force).max(), np.abs(Layout(scene).nodal_loads).max())
     # λ from the dual equals Lagrange's λ to rtol of the force scale (force_rtol's docstring)
     np.testing.assert_allclose(result.contact_force, reference.contact_force, rtol=0,
                                atol=rtol * force_scale)
@@ -130,7 +163,7 @@ def test_dual_is_the_contact_force(row, scene_name, contact):
     # support reactions + wall forces balance the loads (the reactions come from u, so this is
     # the global balance of the displacements and the duals together)
     walls = sum(-w.sign * lam for w, lam in zip(scene.walls, result.contact_force))
-    total = result.reactions.sum() + walls + scene.nodal_loads().sum()
+    total = result.reactions.sum() + walls + Layout(scene).nodal_loads.sum()
     assert abs(total) <= rtol * force_scale
     # the independent check passes too, except through a cone rewrite, which stops short of
     # its 1e-6 equilibrium tolerance (measured: 1e-7 to 1e-5 of the force scale)
@@ -166,64 +199,30 @@ def test_open_gap(row):
     assert "pulls" in held.message
 
 
-# ---------------------------------------------------------------------------------------------
-# The dual sign of each backend, in one table
-
-
-BACKEND_ROWS = [pytest.param(b, id=b) for b in qpmod.BACKEND_MODULES]
-
-
 @pytest.mark.parametrize("backend", BACKEND_ROWS)
 @pytest.mark.parametrize("contact", CONTACTS)
 def test_dual_sign(backend, contact):
-    """The backend's raw dual times DUAL_SIGNS is μ = λ/F with λ > 0 for a wall that pushes
-    (inequality, the default scene) and λ < 0 for one that pulls (equality, open gap)."""
-    if qpmod.BACKENDS[backend] is None:
-        pytest.skip(f"backend {backend} is not installed: {qpmod.BACKEND_MODULES[backend][1]}")
-    scene = contactqp.seed_scene() if contact == "inequality" else open_gap()
+    """The backend's raw dual is μ = λ/F with λ > 0 for a wall that pushes (inequality, the
+    default scene) and λ < 0 for one that pulls (equality, open gap): every backend's sign is
+    +1, so contactqp uses the dual as it is."""
+    if qpmod.backend_module(backend) is None:
+        pytest.skip(f"backend {backend} is not installed: {qpmod.BACKENDS[backend].pip}")
+    scene = contactqp.default_scene() if contact == "inequality" else open_gap()
     model = contactqp.build_model(scene)
     module, solver = qpmod.resolve_solver(backend, None)
     qp = qpmod.qp_from_model(model, contact)
-    raw = module.solve(qp, solver, qpmod.accuracy_settings(solver, "high"))
+    raw = module.solve(qp, solver, qpmod.accuracy_settings(solver, "high"), False)
     reference = contactqp.solve(scene, method="lagrange", contact=contact).contact_force
     mu = reference / qp.force_scale
     assert np.sign(reference[0]) == (1 if contact == "inequality" else -1)
     # Clarabel at "high" is the default solver of three backends; OSQP polishes: 1e-6 of μ
-    assert qpmod.DUAL_SIGNS[backend][contact] * raw.dual == pytest.approx(mu, abs=1e-6)
-
-
-# ---------------------------------------------------------------------------------------------
-# The independent check catches solvers that claim success and are wrong
-
-
-def long_bar(elements: int = 1000) -> Scene:
-    """The default scene cut into ``elements`` equal elements (load at mid-length, wall at the
-    tip): K reaches 2e11 N/m."""
-    seed = contactqp.seed_scene()
-    bar = Bar.tapered_circle(1.0, elements, 0.040, 0.020, 210e9)
-    return Scene(bar, (Support(0),), (Load(elements // 2, seed.loads[0].force),),
-                 (Wall(elements, seed.walls[0].gap, "+"),), name=f"{elements} elements")
-
-
-WRONG_BUT_CLAIMED = [
-    # HiGHS in SI units on the default scene: the wall node stays at u = 0 with "optimal";
-    # 7.6 % off in λ (measured, highspy 1.x through both front ends)
-    pytest.param("qpsolvers", "highs", contactqp.seed_scene, "complementarity",
-                 id="qpsolvers-highs-seed"),
-    pytest.param("cvxpy", "HIGHS", contactqp.seed_scene, "complementarity", id="cvxpy-HIGHS-seed"),
-    # QPALM at its own default tolerance (1e-4) in SI units: the tip 1.3 % past the wall
-    pytest.param("qpsolvers", "qpalm", contactqp.seed_scene, "feasibility",
-                 id="qpsolvers-qpalm-seed"),
-    # OSQP at its default tolerance (1e-3) in SI units on 1000 elements: "solved", with an
-    # equilibrium residual of 1e-3 (scaled, the same settings pass)
-    pytest.param("osqp", "osqp", long_bar, "equilibrium", id="osqp-1000-elements"),
-]
+    assert raw.dual == pytest.approx(mu, abs=1e-6)
 
 
 @pytest.mark.parametrize(("backend", "solver", "make_scene", "residual"), WRONG_BUT_CLAIMED)
 def test_check_catches_a_false_success(backend, solver, make_scene, residual):
     """Default accuracy, scale=False: cases measured to claim success with a wrong answer."""
-    row = next((r for r in SOLVERS if (r.backend, r.solver) == (backend, solver)), None)
+    row = next((r for r in QP_SOLVERS if (r.backend, r.solver) == (backend, solver)), None)
     if row is None or not row.available:
         pytest.skip(f"{backend}/{solver} is not installed")
     result = contactqp.solve(make_scene(), method="qp", backend=backend, solver=solver,
@@ -235,7 +234,7 @@ def test_check_catches_a_false_success(backend, solver, make_scene, residual):
 
 
 def test_a_solver_that_raises_gives_nan_and_no_claim(monkeypatch):
-    module = qpmod.BACKENDS["clarabel"]
+    module = qpmod.backend_module("clarabel")
 
     def explode(qp, solver, settings, verbose):
         raise RuntimeError("factorisation failed")
@@ -245,10 +244,6 @@ def test_a_solver_that_raises_gives_nan_and_no_claim(monkeypatch):
     assert not result.claimed_success and not result.verified
     assert "raised RuntimeError: factorisation failed" in result.status
     assert np.isnan(result.contact_force).all()
-
-
-# ---------------------------------------------------------------------------------------------
-# The QP data
 
 
 @pytest.mark.parametrize("scene_name", list(SCENES))
@@ -293,10 +288,6 @@ def test_scaling_round_trip_and_scaled_kkt(scene_name):
     assert np.abs(mu).max() <= 10.0  # multipliers O(1)
 
 
-# ---------------------------------------------------------------------------------------------
-# The registry and the options
-
-
 def test_registry_lists_installed_pairs_and_pip_hints():
     rows = contactqp.available_qp_solvers()
     assert {("clarabel", "clarabel"), ("osqp", "osqp")} <= {(r.backend, r.solver) for r in rows}
@@ -307,7 +298,7 @@ def test_registry_lists_installed_pairs_and_pip_hints():
 
 
 def test_missing_backend_raises_with_a_pip_hint(monkeypatch):
-    monkeypatch.setitem(qpmod.BACKENDS, "osqp", None)
+    monkeypatch.setitem(qpmod._LOADED, "osqp", None)
     monkeypatch.setitem(qpmod.MISSING, "osqp", "No module named 'osqp'")
     with pytest.raises(SolverNotAvailable, match=r"pip install osqp"):
         contactqp.solve(method="qp", backend="osqp")
@@ -315,7 +306,7 @@ def test_missing_backend_raises_with_a_pip_hint(monkeypatch):
 
 
 def test_missing_solver_raises_with_a_pip_hint(monkeypatch):
-    module = qpmod.BACKENDS["qpsolvers"]
+    module = qpmod.backend_module("qpsolvers")
     if module is None:
         pytest.skip("qpsolvers is not installed")
     installed = tuple(s for s in module.installed_solvers() if s != "highs")
@@ -339,9 +330,9 @@ def test_unknown_options_raise_option_error(options, words):
 
 
 def test_cvxpy_resolves_a_new_load_without_recanonicalising():
-    if qpmod.BACKENDS["cvxpy"] is None:
+    if qpmod.backend_module("cvxpy") is None:
         pytest.skip("cvxpy is not installed")
-    qpmod.BACKENDS["cvxpy"].clear_cache()
+    qpmod.backend_module("cvxpy").clear_cache()
     scene = several_walls()
     first = qpmod.solve_qp(contactqp.build_model(scene), "inequality", backend="cvxpy")
     assert first.info["cache"] == "miss"
@@ -361,9 +352,9 @@ def test_cvxpy_resolves_a_new_load_without_recanonicalising():
 def test_cvxpy_uses_constants_where_parameters_would_densify(monkeypatch, limit, parameters):
     # cvxpy densifies (unknowns + 2) x (parameter entries + 1) coefficients; over the limit a
     # vector is a constant and its values key the cache: a new value must not hit a stale one
-    if qpmod.BACKENDS["cvxpy"] is None:
+    if qpmod.backend_module("cvxpy") is None:
         pytest.skip("cvxpy is not installed")
-    backend = qpmod.BACKENDS["cvxpy"]
+    backend = qpmod.backend_module("cvxpy")
     monkeypatch.setattr(backend, "DENSE_LIMIT", limit)
     backend.clear_cache()
     scene = several_walls()  # 6 unknowns, 3 loads, 4 walls: 8 x 4 = 32, 8 x 8 = 64 entries
@@ -386,9 +377,18 @@ def test_cvxpy_uses_constants_where_parameters_would_densify(monkeypatch, limit,
 
 def test_dense_solvers_are_not_attempted_on_a_long_bar(monkeypatch):
     monkeypatch.setattr(qpmod, "DENSE_LIMIT", 3)
-    row = next((r for r in SOLVERS if (r.backend, r.solver) == ("qpsolvers", "quadprog")), None)
+    row = next((r for r in QP_SOLVERS if (r.backend, r.solver) == ("qpsolvers", "quadprog")), None)
     if row is None or not row.available:
         pytest.skip("quadprog is not installed")
     result = contactqp.solve(method="qp", backend="qpsolvers", solver="quadprog")
     assert not result.claimed_success and not result.verified
     assert result.status.startswith("not attempted")
+
+
+
+def test_the_readme_shows_the_accuracy_table_as_it_is():
+    """The README's accuracy table is accuracy_table()'s output: one table, written once."""
+    from contactqp.methods.qp.settings import accuracy_table
+
+    readme = (Path(__file__).parent.parent / "README.md").read_text(encoding="utf-8")
+    assert accuracy_table() in readme

@@ -114,7 +114,7 @@ def first_contact_factor(scene: Scene) -> float:
 
 
 def _factors(steps: Any) -> np.ndarray:
-    steps = whole_number("steps (0 and 1 included)", steps, 2, error=OptionError)
+    steps = whole_number("steps", steps, 2, error=OptionError, note=" (0 and 1 included)")
     return np.linspace(0.0, 1.0, steps)
 
 

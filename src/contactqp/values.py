@@ -63,12 +63,13 @@ def positive_number(name: str, value: Any, unit: str = "",
 
 
 def whole_number(name: str, value: Any, minimum: int | None = None, what: str = "number",
-                 error: type[ContactqpError] = SceneError) -> int:
-    """``value`` as an int (not a boolean, not a float), at least ``minimum``."""
+                 error: type[ContactqpError] = SceneError, note: str = "") -> int:
+    """``value`` as an int (not a boolean, not a float), at least ``minimum``; ``note`` is
+    added to the message."""
     if not isinstance(value, (int, np.integer)) or isinstance(value, (bool, np.bool_)) or (
             minimum is not None and value < minimum):
         at_least = "" if minimum is None else f" >= {minimum}"
-        raise error(f"{name} must be a whole {what}{at_least}, got {shown(value)}")
+        raise error(f"{name} must be a whole {what}{at_least}{note}, got {shown(value)}")
     return int(value)
 
 

@@ -1,0 +1,380 @@
+"""Closed forms, scenes and strategies shared by several test modules; every expected number
+here is computed from the problem statement, never by the library.
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+import math
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+import contactqp
+from contactqp import (
+    Bar,
+    Load,
+    Scene,
+    Support,
+    Wall,
+)
+from contactqp.methods import qp as qpmod
+from contactqp.model import (
+    Layout,
+)
+from contactqp.reference import (
+    reference,
+)
+
+E, F, GAP, LENGTH = 210e9, 565486.67, 1e-4, 1.0
+
+
+def cone_like_f() -> float:
+    """f of the default 4-element midpoint mesh, from the element areas computed here."""
+    mids = [0.0375, 0.0325, 0.0275, 0.0225]
+    return sum(0.25 / (E * math.pi * d**2 / 4) for d in mids)
+
+
+HAND_GAP = 1.5e-4  # m
+
+
+def hand_scene(force: float = 3e4, gap: float = HAND_GAP) -> Scene:
+    bar = Bar.from_areas([1e-3, 5e-4], 2e11, lengths=[1.0, 1.0])
+    return Scene(bar, (Support(0),), (Load(2, force),), (Wall(2, gap, "+"),))
+
+
+# The seed scene, as the problem states it
+DEFAULT_E = 210e9  # Pa
+
+
+DEFAULT_YIELD = 200e6  # Pa
+
+
+DEFAULT_F, DEFAULT_LOAD_NODE = 565486.67, 2  # N
+
+
+DEFAULT_GAP, DEFAULT_WALL_NODE = 1e-4, 4  # m
+
+
+DEFAULT_LENGTHS = [0.25] * 4  # m
+
+
+DEFAULT_DIAMETERS = [0.040, 0.035, 0.030, 0.025, 0.020]  # m, at nodes 0..4
+
+
+def seed_areas(area_rule: str) -> list[float]:
+    """Element areas of the seed bar from its diameters (m²)."""
+    pairs = itertools.pairwise(DEFAULT_DIAMETERS)
+    if area_rule == "midpoint":
+        return [math.pi * ((da + db) / 2) ** 2 / 4 for da, db in pairs]
+    return [math.pi * da * db / 4 for da, db in pairs]
+
+
+def seed_scene_with(area_rule: str = "midpoint", force: float = DEFAULT_F,
+                    walls: tuple[Wall, ...] = (Wall(DEFAULT_WALL_NODE, DEFAULT_GAP, "+"),)) -> Scene:
+    bar = Bar.tapered_circle(1.0, 4, 0.040, 0.020, DEFAULT_E, area_rule=area_rule,
+                             yield_stress=DEFAULT_YIELD)
+    return Scene(bar, (Support(0),), (Load(DEFAULT_LOAD_NODE, force),), walls)
+
+
+def cantilever(lengths, areas, modulus, loads, wall, *, contact="inequality", penalty=None):
+    """Closed form (u at every node, λ) of a bar fixed at node 0 with one wall.
+
+    Pure Python, so it runs on floats and on Fractions alike. ``loads`` is [(node, force)],
+    ``wall`` is (node, gap, side); ``penalty`` ε adds the spring's flexibility 1/ε.
+    """
+    flex = list(itertools.accumulate(
+        (length / (modulus * area) for length, area in zip(lengths, areas)), initial=0))
+    nodes = range(len(flex))
+    u_free = [sum(force * flex[min(a, j)] for a, force in loads) for j in nodes]
+    w, gap, side = wall
+    s = 1 if side == "+" else -1
+    lam = (s * u_free[w] - gap) / (flex[w] + (0 if penalty is None else 1 / penalty))
+    if contact == "inequality":
+        lam = max(lam, 0 * lam)
+    return [u_free[j] - s * lam * flex[min(w, j)] for j in nodes], lam
+
+
+def seed_closed_form(area_rule="midpoint", force=DEFAULT_F, contact="inequality", penalty=None):
+    return cantilever(DEFAULT_LENGTHS, seed_areas(area_rule), DEFAULT_E, [(DEFAULT_LOAD_NODE, force)],
+                      (DEFAULT_WALL_NODE, DEFAULT_GAP, "+"), contact=contact, penalty=penalty)
+
+
+def seed_flexibility(node: int, area_rule: str = "midpoint") -> float:
+    """f_node of the seed bar (m/N)."""
+    return sum(length / (DEFAULT_E * area)
+               for length, area in zip(DEFAULT_LENGTHS[:node], seed_areas(area_rule)[:node]))
+
+
+def assert_normwise(actual, expected, rel: float) -> None:
+    """max |actual − expected| <= rel · max |expected|: how round-off shows in a solve."""
+    actual, expected = np.asarray(actual, float), np.asarray(expected, float)
+    assert actual.shape == expected.shape
+    assert np.abs(actual - expected).max(initial=0.0) <= rel * np.abs(expected).max(initial=0.0)
+
+
+def dense_algebra(scene: Scene):
+    """(K_full, P_full, free nodes, K, P, C, g) with K_full and P_full over every node."""
+    bar = scene.bars[0]
+    n = Layout(scene).n_nodes
+    k = np.asarray(bar.youngs_modulus) * np.asarray(bar.areas) / np.asarray(bar.lengths)
+    K_full = np.zeros((n, n))
+    for e, ke in enumerate(k):
+        K_full[e:e + 2, e:e + 2] += ke * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    P_full = np.zeros(n)
+    for load in scene.loads:
+        P_full[load.node] += load.force
+    held = {s.node for s in scene.supports}
+    free = [j for j in range(n) if j not in held]
+    C = np.zeros((len(scene.walls), len(free)))
+    for i, wall in enumerate(scene.walls):
+        C[i, free.index(wall.node)] = 1.0 if wall.side == "+" else -1.0
+    g = np.array([w.gap for w in scene.walls], dtype=float)
+    return K_full, P_full, free, K_full[np.ix_(free, free)], P_full[free], C, g
+
+
+def answer_scales(scene: Scene, u: np.ndarray, lam: np.ndarray) -> tuple[float, float]:
+    """(force scale N, displacement scale m) against which round-off is measured: the largest
+    load or contact force, and the largest of |u|, the gaps and what that force does to the
+    softest element (so the scale stays physical where the exact u is 0)."""
+    bar = scene.bars[0]
+    force = max(np.abs(Layout(scene).nodal_loads).max(), np.abs(lam).max(initial=0.0))
+    k_min = float(np.min(np.asarray(bar.youngs_modulus) * bar.areas / bar.lengths))
+    gaps = [w.gap for w in scene.walls]
+    return force, max(np.abs(u).max(initial=0.0), max(gaps, default=0.0), force / k_min)
+
+
+def brute_force(scene: Scene, contact: str = "inequality"):
+    """(u at every node, λ, walls in contact) by trying every set of walls in contact."""
+    _, _, free, K, P, C, g = dense_algebra(scene)
+    m = g.size
+    if contact == "equality":
+        candidates = [tuple(range(m))]
+    else:
+        candidates = itertools.chain.from_iterable(
+            itertools.combinations(range(m), r) for r in range(m + 1))
+    for active in candidates:
+        active = list(active)
+        nodes = [scene.walls[i].node for i in active]
+        if len(set(nodes)) < len(nodes):
+            continue  # one node against walls on both sides: one of them suffices
+        Ca = C[active]
+        saddle = np.block([[K, Ca.T], [Ca, np.zeros((len(active), len(active)))]])
+        x = np.linalg.solve(saddle, np.concatenate((P, g[active])))
+        lam = np.zeros(m)
+        lam[active] = x[len(free):]
+        f_scale, u_scale = answer_scales(scene, x[:len(free)], lam)
+        # KKT within round-off of these small dense solves (κ ≲ 1e5, so ~1e-11)
+        feasible = np.all(C @ x[:len(free)] - g <= 1e-9 * u_scale)
+        pushing = np.all(lam >= -1e-9 * f_scale)
+        if contact == "equality" or (feasible and pushing):
+            u = np.zeros(Layout(scene).n_nodes)
+            u[free] = x[:len(free)]
+            return u, lam, active
+    raise AssertionError("no set of walls in contact satisfies the KKT conditions")
+
+
+def small_force() -> float:
+    """A load that moves the wall node only half way to the wall: F f_2 = g / 2."""
+    return 0.5 * DEFAULT_GAP / seed_flexibility(DEFAULT_LOAD_NODE)
+
+
+def fixed_fixed_scene() -> Scene:
+    """Fixed at both ends; pushed +x at node 2 and -x at node 4 into a "+" and a "-" wall;
+    two more walls that stay open."""
+    bar = Bar.from_areas([1e-3, 8e-4, 6e-4, 6e-4, 8e-4, 1e-3], 2e11, length=3.0)
+    return Scene(
+        bar, (Support(0), Support(6)), (Load(2, 2e5), Load(4, -2e5)),
+        (Wall(2, 1e-4, "+"), Wall(4, 5e-5, "-"), Wall(5, 0.0, "+"), Wall(1, 2e-3, "-")),
+    )
+
+
+def cantilever_interior_walls_scene() -> Scene:
+    """Fixed at node 0, uneven elements; a "+" wall at node 2 and a "-" wall at the tip are
+    touched; a "+" wall at node 3 and a "-" wall at node 1 are not."""
+    bar = Bar.from_areas([2e-3, 1.5e-3, 1e-3, 1e-3, 5e-4], 2e11,
+                         lengths=[0.5, 0.5, 0.25, 0.25, 0.5])
+    return Scene(
+        bar, (Support(0),), (Load(2, 3e5), Load(5, -1e5)),
+        (Wall(2, 1e-4, "+"), Wall(5, 2e-4, "-"), Wall(3, 1e-3, "+"), Wall(1, 0.0, "-")),
+    )
+
+
+SEVERAL_WALLS = [fixed_fixed_scene, cantilever_interior_walls_scene]
+
+
+QP_PAIRS = [(s.backend, s.solver) for s in contactqp.available_qp_solvers() if s.available]
+
+
+def runs(rng: np.random.Generator) -> list[tuple[str, dict, str]]:
+    """(method, options, formulation) for every method and every installed QP solver."""
+    out = [("lagrange", {}, f) for f in ("full", "condensed", "strain")]
+    out += [("penalty", {}, f) for f in ("full", "condensed")]
+    out += [("augmented", {}, f) for f in ("full", "condensed")]
+    for backend, solver in QP_PAIRS:
+        out.append(("qp", {"backend": backend, "solver": solver,
+                           "accuracy": str(rng.choice(["default", "high"])),
+                           "scale": bool(rng.random() < 0.8)},
+                    str(rng.choice(["full", "condensed", "strain"]))))
+    return out
+
+
+SEED = contactqp.default_scene()
+
+
+BAR = Bar.from_areas([1e-4, 1e-4], 2e11, length=2.0)
+
+
+INSTALLED_SOLVERS = [s for s in contactqp.available_qp_solvers() if s.available]
+
+
+QP_SOLVERS = contactqp.available_qp_solvers()
+
+
+PAIRS = [pytest.param(r, id=f"{r.backend}-{r.solver}") for r in QP_SOLVERS]
+
+
+# Solvers that see the QP through cvxpy's or qpsolvers' second-order-cone rewrite of the
+# objective (t >= ‖Lx‖²): a tolerance ε on that problem leaves an error ~√ε in x and λ.
+SOC_REWRITE = {("cvxpy", "ECOS"), ("cvxpy", "CVXOPT"), ("qpsolvers", "ecos")}
+
+
+TOLERANCE_KEYS = ("eps_abs", "tol_feas", "abstol", "primal_tol", "primal_feasibility_tolerance")
+
+
+def force_rtol(backend: str, solver: str) -> float:
+    """Relative error in λ that accuracy="high" allows (the tests' tolerance for a solver).
+
+    The scaled QP and its multipliers are O(1) (see contactqp.methods.qp), so a solver that
+    stops at residual ε leaves λ/F off by about ε times the condition number of the scaled
+    KKT system, below 1e2 for the scenes here: rtol = 1e3·ε, and 1e-9 for an exact active-set
+    method (ε = round-off). Through a cone rewrite, 10·√ε (SOC_REWRITE).
+    """
+    settings = qpmod.accuracy_settings(solver, "high", backend=backend)
+    eps = min((settings[k] for k in TOLERANCE_KEYS if k in settings), default=1e-12)
+    if (backend, solver) in SOC_REWRITE:
+        return 10.0 * math.sqrt(eps)
+    return max(1e3 * eps, 1e-9)
+
+
+def require(row: contactqp.methods.qp.QPSolverInfo) -> None:
+    if not row.available:
+        pytest.skip(f"{row.backend}/{row.solver} is not installed: {row.install}")
+
+
+def several_walls() -> Scene:
+    """Six elements fixed at node 0, pushed and pulled: walls on both sides, one open."""
+    bar = Bar.from_areas([4e-4, 4e-4, 3e-4, 3e-4, 2e-4, 2e-4], 200e9, length=1.2)
+    loads = (Load(2, 3.0e5), Load(4, -1.0e5), Load(6, 2.0e5))
+    walls = (
+        Wall(2, 5e-4, "+"),   # closed: node 2 is pushed past 0.5 mm
+        Wall(4, 2e-3, "-"),   # open: far behind node 4
+        Wall(6, 1.5e-3, "+"),  # closed
+        Wall(5, 5e-3, "+"),   # open
+    )
+    return Scene(bar, (Support(0),), loads, walls, name="several walls")
+
+
+def both_sides() -> Scene:
+    """Walls on both sides of one node (inequality only) and a second support at the end."""
+    bar = Bar.from_areas([5e-4] * 5, 200e9, length=1.0)
+    loads = (Load(2, -4.0e5), Load(3, 2.0e5))
+    walls = (Wall(2, 3e-4, "+"), Wall(2, 2e-4, "-"), Wall(3, 1e-4, "+"))
+    return Scene(bar, (Support(0), Support(5)), loads, walls, name="both sides")
+
+
+def open_gap() -> Scene:
+    """The default scene with the wall 5 mm away: the free tip moves 0.98 mm, the gap stays
+    open."""
+    seed = contactqp.default_scene()
+    return seed.with_walls((Wall(seed.walls[0].node, 5e-3, "+"),))
+
+
+SCENES = {
+    "seed": contactqp.default_scene,
+    "several_walls": several_walls,
+    "both_sides": both_sides,
+    "open_gap": open_gap,
+}
+
+
+def spring(k: float, length: float = 1.0) -> Bar:
+    """A one-element bar of stiffness k (N/m)."""
+    return Bar.from_areas([k * length / E_SPRINGS], E_SPRINGS, length=length)
+
+
+def exact(values) -> list[Fraction]:
+    return [Fraction(float(v)) for v in values]
+
+
+def clamped(load: Load) -> Scene:
+    """Node 1 between two zero-gap walls, a zero-gap "+" wall at node 2 (test_clamped_node)."""
+    return Scene(Bar.from_areas([1e-4, 1e-3], 2e11, length=2.0), (Support(0),), (load,),
+                 (Wall(1, 0.0, "+"), Wall(1, 0.0, "-"), Wall(2, 0.0, "+")))
+
+
+EXAMPLES = sorted((Path(__file__).parent.parent / "examples").glob("*.toml"))
+
+
+E_SPRINGS = 200e9
+
+
+E_STEEL = 210e9  # Pa
+
+
+DEFAULT_DIAMETERS_MM = [40.0, 35.0, 30.0, 25.0, 20.0]  # at nodes 0..4 of the seed scene
+
+
+def valid_data() -> dict:
+    """A valid scene as the parsed TOML structure: 2 elements, nodes 0, 1, 2."""
+    return {
+        "name": "valid",
+        "material": {"youngs_modulus": 2e11, "yield_stress": 2.5e8},
+        "bar": {"areas": [1e-4, 2e-4], "length": 1.0},
+        "support": [{"node": 0}],
+        "load": [{"node": 2, "force": 1e3}],
+        "wall": [{"node": 2, "gap": 1e-4, "side": "+"}],
+    }
+
+
+def with_value(data: dict, path: tuple, value) -> dict:
+    """A deep copy of ``data`` with the item at ``path`` (keys and list indices) set."""
+    data = copy.deepcopy(data)
+    target = data
+    for key in path[:-1]:
+        target = target[key]
+    target[path[-1]] = value
+    return data
+
+
+def touching() -> Scene:
+    """The default scene with the load that brings node 4 exactly to its wall: F·f₂ = g."""
+    scene = contactqp.default_scene()
+    flexibility = sum(Fraction(1) / Fraction(k) for k in Layout(scene).element_stiffness[:2])
+    return scene.with_loads((Load(2, float(Fraction(scene.walls[0].gap) / flexibility)),))
+
+
+def error(result: contactqp.Result, scene: Scene) -> float:
+    exact = reference(scene).contact_force
+    scale = np.abs(exact).max() or np.abs(Layout(scene).nodal_loads).max()
+    return float(np.abs(result.contact_force - exact).max()) / scale
+
+
+def diameter(x: float) -> float:
+    return 0.040 - 0.020 * x / LENGTH
+
+
+def cone_compliance(a: float, b: float) -> float:
+    value, _ = quad(lambda x: 1.0 / (E * math.pi * diameter(x) ** 2 / 4.0), a, b,
+                    epsabs=0.0, epsrel=1e-13)
+    return value
+
+
+def continuum_force() -> float:
+    """The default scene's contact force in the continuum: (F f(0, L/2) − g) / f(0, L), f the
+    cone's compliance integrated numerically (scipy.integrate.quad, not the library)."""
+    return (F * cone_compliance(0.0, LENGTH / 2) - GAP) / cone_compliance(0.0, LENGTH)

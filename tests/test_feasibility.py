@@ -1,0 +1,76 @@
+"""The scene's constraint graph (contactqp.feasibility): walls and contacts that leave a node no
+position are refused with the constraints that conflict; equality contact that fixes a node
+twice is refused.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+import contactqp
+from closed_forms import (
+    BAR,
+    SEED,
+    seed_scene_with,
+)
+from contactqp import (
+    BarContact,
+    OptionError,
+    Scene,
+    Support,
+    Wall,
+)
+
+
+def two_bars_with(walls, contacts) -> Scene:
+    return Scene((BAR, BAR), (Support(0, 0), Support(2, 1)), (), walls, contacts=contacts)
+
+
+def test_equality_with_walls_on_both_sides_of_one_node_is_refused():
+    scene = seed_scene_with(walls=(Wall(3, 1e-4, "+"), Wall(3, 1e-4, "-")))
+    with pytest.raises(OptionError, match=r"node 3"):
+        contactqp.solve(scene, "lagrange", "equality")
+
+
+@pytest.mark.parametrize(("plus", "minus"), [(-1e-4, -1e-4), (1e-4, -2e-4)])
+def test_walls_that_leave_a_node_no_position_are_refused(plus, minus):
+    """"+" wall: u <= plus; "−" wall: u >= −minus. No u when plus + minus < 0 (two press fits,
+    or u <= 1e-4 and u >= 2e-4)."""
+    with pytest.raises(contactqp.SceneError) as error:
+        SEED.with_walls((Wall(4, plus, "+"), Wall(4, minus, "-")))
+    message = str(error.value)
+    assert f"wall[0] (u ≤ {plus:g} m at node 4)" in message
+    assert f"wall[1] (u ≥ {-minus:g} m at node 4)" in message
+    assert "no position" in message
+
+
+def test_walls_that_just_clamp_a_node_are_a_scene():
+    """plus + minus = 0: one position, u = plus, which both walls allow."""
+    scene = SEED.with_walls((Wall(4, 1e-4, "+"), Wall(4, -1e-4, "-")))
+    result = contactqp.solve(scene)
+    assert result.u[4] == pytest.approx(1e-4, rel=1e-12)  # held at the one position
+    assert result.verified
+
+
+def test_a_conflict_through_a_bar_contact_names_every_constraint():
+    """bar 0 node 2 pushed to u <= −1e-4, bar 1 node 0 to u >= 2e-4, and the contact
+    u(1, 0) − u(0, 2) <= 0: 2e-4 <= u(1, 0) <= u(0, 2) <= −1e-4, impossible by 3e-4."""
+    with pytest.raises(contactqp.SceneError) as error:
+        two_bars_with((Wall(2, -1e-4, "+", 0), Wall(0, -2e-4, "-", 1)), (BarContact(1, 0, 0, 2, 0.0),))
+    message = str(error.value)
+    for name in ("wall[0]", "wall[1]", "contact[0]"):
+        assert name in message
+    assert "0 ≤ -0.0003 m" in message
+
+
+def test_the_same_walls_with_room_are_a_scene():
+    scene = two_bars_with((Wall(2, -1e-4, "+", 0), Wall(0, 2e-4, "-", 1)), (BarContact(1, 0, 0, 2, 0.0),))
+    assert contactqp.solve(scene).verified
+
+
+def test_equality_through_a_bar_contact_that_fixes_a_node_twice_is_refused():
+    scene = two_bars_with((Wall(2, 1e-4, "+", 0), Wall(0, 1e-4, "-", 1)), (BarContact(1, 0, 0, 2, 0.0),))
+    with pytest.raises(contactqp.OptionError) as error:
+        contactqp.solve(scene, contact="equality")
+    assert all(name in str(error.value) for name in ("wall[0]", "wall[1]", "contact[0]"))
+

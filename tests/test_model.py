@@ -1,0 +1,117 @@
+"""The model (contactqp.model): the layout's arrays, the solves with K (statics and banded),
+the condensed problem and the strain formulation's tie rows.
+
+Glossary: K stiffness matrix of the free nodes, C contact rows, g gaps; S = B K⁻¹ Bᵀ the
+compliance between the contact nodes (B selects them); B u − e = 0 the tie rows of the strain
+formulation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import contactqp
+from closed_forms import (
+    E_SPRINGS,
+    continuum_force,
+)
+from contactqp import (
+    Bar,
+    Scene,
+    Support,
+)
+from contactqp.model import (
+    Layout,
+    build_model,
+    condense,
+    elongation_rows,
+)
+from contactqp.scene import DistributedLoad
+
+
+def test_seen_stiffness_holds_the_supports_and_the_pushing_walls():
+    from contactqp.model import seen_stiffness
+
+    k = 2e11 * 1e-3 / 0.25  # four equal elements of EA/L = 8e8 N/m
+    one = Scene(Bar.from_areas([1e-3] * 4, 2e11, length=1.0), (Support(0),))
+    # node 2 held: node 2 itself sees the two elements to the support in series (k/2), node 3
+    # one element back to node 2 and a free end (k), node 1 one element each way (2k)
+    assert seen_stiffness(Layout(one), np.array([2]), np.array([1, 2, 3, 4])) == pytest.approx(
+        [2 * k, k / 2, k, k / 2], rel=1e-12)
+    # a second bar is not a neighbour: its support holds only its own nodes
+    two = Scene((one.bars[0], one.bars[0]), (Support(0), Support(0, bar=1)))
+    assert seen_stiffness(Layout(two), np.array([], dtype=int), np.array([4, 6])) == pytest.approx(
+        [k / 4, k], rel=1e-12)  # bar 1 node 1: one element from its support
+
+
+def test_condensed_model_is_the_flexibility_at_the_walls():
+    model = build_model(contactqp.default_scene())
+    small = condense(model)
+    dense_inverse = np.linalg.inv(model.K.toarray())
+    wall = model.C.indices[0]
+    # one wall: S = (K⁻¹)_ww, computed here by a dense inverse
+    assert small.K.toarray() == pytest.approx(1.0 / dense_inverse[wall, wall], rel=1e-12)
+    assert small.P == pytest.approx(small.K.toarray()[0, 0] * (dense_inverse @ model.P)[wall],
+                                    rel=1e-12)
+
+
+def test_condensed_with_too_many_contact_nodes_is_refused():
+    bar = contactqp.Bar.from_areas(np.full(2500, 1e-3), 1e9, length=1.0)
+    walls = tuple(contactqp.Wall(i, 1e-3) for i in range(1, 2501))
+    scene = contactqp.Scene(bar, (contactqp.Support(0),), (), walls)
+    with pytest.raises(contactqp.OptionError, match="2500 contact nodes"):
+        contactqp.solve(scene, formulation="condensed")
+
+
+def test_elongation_rows_drop_supported_nodes():
+    bar = contactqp.Bar.from_areas([1e-4] * 3, 1e9, length=3.0)
+    scene = contactqp.Scene(bar, (contactqp.Support(0), contactqp.Support(3)), (), ())
+    # free nodes 1, 2: e0 = u1, e1 = u2 − u1, e2 = −u2
+    assert elongation_rows(build_model(scene)).toarray() == pytest.approx(
+        np.array([[1.0, 0.0], [-1.0, 1.0], [0.0, -1.0]]))
+
+
+@pytest.mark.parametrize("support", [0, 3, 7])
+@pytest.mark.parametrize("columns", [1, 3, 40])
+def test_determinate_chain_solve_is_the_inverse_of_K(support, columns):
+    """K⁻¹ from statics (the Green's function for a few loaded rows, cumulative sums for
+    many) against a dense solve with the assembled K: κ(K) <= ~1e3 here, so 1e-12."""
+    rng = np.random.default_rng(support + columns)
+    bar = contactqp.Bar.from_areas(rng.uniform(1e-4, 1e-3, 40), 2e11, length=2.0)
+    scene = contactqp.Scene(bar, (contactqp.Support(support),), (), ())
+    model = build_model(scene)
+    rhs = np.zeros((model.n_free, columns))
+    rows = rng.choice(model.n_free, size=min(columns, model.n_free), replace=False)
+    rhs[rows, np.arange(rows.size) % columns] = rng.normal(size=rows.size)
+    if columns == 40:
+        rhs = rng.normal(size=rhs.shape)  # every row loaded: the cumulative-sum path
+    expected = np.linalg.solve(model.K.toarray(), rhs)
+    np.testing.assert_allclose(model.solve_K(rhs), expected, rtol=0,
+                               atol=1e-12 * np.abs(expected).max())
+
+
+def test_a_million_element_bar_is_exact_to_round_off():
+    """Exact areas: the discrete tip flexibility is the cone's ∫dx/(EA), so the condensed
+    contact force equals the continuum closed form up to round-off. Assembling K and
+    factoring it (two supports' path) loses ~3e-8 here; statics loses ~n·ε."""
+    n = 200_000
+    bar = contactqp.Bar.tapered_circle(1.0, n, 0.040, 0.020, 210e9, area_rule="exact")
+    seed = contactqp.default_scene()
+    scene = contactqp.Scene(bar, (contactqp.Support(0),), (contactqp.Load(n // 2, seed.loads[0].force),),
+                            (contactqp.Wall(n, seed.walls[0].gap, "+"),))
+    result = contactqp.solve(scene, formulation="condensed")
+    assert result.verified
+    assert result.contact_force[0] == pytest.approx(continuum_force(), rel=1e-12)
+
+
+def test_distributed_load_on_part_of_a_bar_and_its_nodal_forces():
+    bar = Bar.from_areas([1e-4] * 4, E_SPRINGS, lengths=[0.1, 0.2, 0.3, 0.4])
+    scene = Scene(bar, (Support(0),), distributed=(DistributedLoad(1000.0, start=1, stop=3),))
+    # element 1 (0.2 m) and 2 (0.3 m): 200 N and 300 N split half to each end
+    assert Layout(scene).nodal_loads == pytest.approx([0.0, 100.0, 250.0, 150.0, 0.0])
+    result = contactqp.solve(scene)
+    assert result.reactions[0] == pytest.approx(-500.0)
+    # N(x) = q (0.6 − x) on the loaded part; an element's k·Δu is its mean over the element
+    assert result.element_force == pytest.approx([500.0, 400.0, 150.0, 0.0], abs=1e-9)
+
