@@ -37,18 +37,10 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     With the held nodes fixed, those loads' effect is computed exactly, run by run between
     held nodes (:func:`propagate`); a held node moved by δ moves its runs by at most δ and
     changes the forces at itself and its held neighbours (:func:`gap_moves`)."""
-    rows, row_nodes, _, gaps = layout.rows
-    n_rows = gaps.size
+    rows, row_nodes, _, _ = layout.rows
     pen = penetration(layout, u)
     equality = contact == "equality"
-    if equality:
-        pushing = np.ones(n_rows, dtype=bool)
-    else:
-        held_rows = lam > hold * F
-        held = np.concatenate((layout.support_nodes, row_nodes[held_rows[rows]]))
-        s = row_stiffness(layout, np.unique(held), held_rows)
-        stand_off = np.maximum(-pen, 0.0)
-        pushing = lam > stand_off * s  # closing its gap is the smaller move
+    pushing = _pushing(layout, lam, pen, hold * F, equality)
     held = np.unique(np.concatenate((layout.support_nodes, row_nodes[pushing[rows]])))
     s, s_ends = row_stiffness(layout, held, pushing, ends=True)
     delta = np.abs(pen) if equality else np.where(pushing, np.abs(pen), np.maximum(pen, 0.0))
@@ -97,6 +89,20 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     return Bounds(residuals, force_bound, displacement_bound)
 
 
+def _pushing(layout: Layout, lam: np.ndarray, pen: np.ndarray, hold: float,
+             equality: bool) -> np.ndarray:
+    """Which rows the nearby scene holds: every row for equality contact; else those whose
+    force exceeds what closing their gap takes (the stiffness seen with the rows pushing
+    more than ``hold`` held), so that closing the gap is the smaller move."""
+    rows, row_nodes, _, gaps = layout.rows
+    if equality:
+        return np.ones(gaps.size, dtype=bool)
+    strong = lam > hold
+    held = np.unique(np.concatenate((layout.support_nodes, row_nodes[strong[rows]])))
+    s = row_stiffness(layout, held, strong)
+    return lam > np.maximum(-pen, 0.0) * s
+
+
 def propagate(layout: Layout, held: np.ndarray, links: np.ndarray, nodes: np.ndarray,
               external: np.ndarray) -> tuple[float, float]:
     """What the imbalance of an answer does with the ``held`` nodes (sorted) fixed: (the
@@ -117,7 +123,7 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray, nodes: np.nda
     if element.size == 0:
         return 0.0, 0.0
     r = (links + outside[:-1])[element]
-    flexibility = 1.0 / k[element]
+    compliance = 1.0 / k[element]
     bar = np.searchsorted(offsets, element, side="right") - 1
     position = np.searchsorted(held, element, side="right")  # held nodes at or before the start
     first, last = offsets[bar], offsets[bar + 1] - 1
@@ -131,10 +137,10 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray, nodes: np.nda
     after_bar = outside[last]
     # c per run: weighted mean (held at both ends), the free end's cut residual otherwise
     both = left_held[starts] & right_held[starts]
-    mean = np.add.reduceat(r * flexibility, starts) / np.add.reduceat(flexibility, starts)
+    mean = np.add.reduceat(r * compliance, starts) / np.add.reduceat(compliance, starts)
     c_run = np.where(both, mean, np.where(left_held[starts], after_bar[starts], before_bar[starts]))
     c = np.repeat(c_run, size)
-    elongation = (c - r) * flexibility
+    elongation = (c - r) * compliance
     total = np.cumsum(elongation)
     base = np.repeat(total[starts] - elongation[starts], size)  # the sum before each run
     from_left = total - base  # displacement of each element's end node, from the left end

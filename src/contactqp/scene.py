@@ -18,6 +18,7 @@ from typing import Any, Literal
 import numpy as np
 
 from contactqp.errors import SceneError
+from contactqp.units import UNIT_SYSTEMS, Units
 from contactqp.values import number, positive_numbers, whole_number
 
 AreaRule = Literal["midpoint", "exact"]
@@ -25,33 +26,6 @@ WallSide = Literal["+", "-"]
 AREA_RULES = ("midpoint", "exact")
 WALL_SIDES = ("+", "-")
 MAX_ELEMENTS = 10_000_000  # every element costs ~1 kB across model, solve and check
-
-
-@dataclass(frozen=True)
-class Units:
-    """A consistent unit system (force = stress × area, stiffness = force / length): the
-    names of its units, and the size of its length and stress units in SI (m, Pa). Every
-    number of a scene is in its units, and so is every answer: the algebra needs no
-    conversion."""
-
-    name: str
-    length: str
-    area: str
-    force: str
-    stress: str
-    metre: float  # one length unit, in m
-    pascal: float  # one stress unit, in Pa
-
-    @property
-    def stiffness(self) -> str:
-        """The unit of a stiffness (and of a distributed load): force per length."""
-        return f"{self.force}/{self.length}"
-
-
-UNIT_SYSTEMS = {
-    "SI": Units("SI", "m", "m²", "N", "Pa", 1.0, 1.0),
-    "mm-N-MPa": Units("mm-N-MPa", "mm", "mm²", "N", "MPa", 1e-3, 1e6),
-}
 
 
 def circle_areas(diameters_a: np.ndarray, diameters_b: np.ndarray, rule: str) -> np.ndarray:

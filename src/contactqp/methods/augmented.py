@@ -6,7 +6,7 @@ For fixed multipliers λ the displacements minimise
 right-hand side shifted by the multipliers:
     (K + ε C_AᵀC_A) D = P − C_Aᵀ(λ_A − ε g_A),   A = walls with λᵢ + ε(CᵢD − gᵢ) > 0.
 Then λ ← max(0, λ + ε(C D − g)). Each update shrinks the force error by about 1/(1 + ε f)
-(f the flexibility at the wall), so a penalty that alone would leave a visible penetration
+(f the compliance at the wall), so a penalty that alone would leave a visible penetration
 converges to the exact contact force in a few updates, without the ill-conditioning of a
 penalty large enough to be accurate on its own.
 """
