@@ -1,5 +1,13 @@
-"""Closed forms, scenes and strategies shared by several test modules; every expected number
-here is computed from the problem statement, never by the library.
+"""Closed forms, scenes and helpers shared by several test modules.
+
+Every expected number here comes from the problem statement: closed forms, exact arithmetic,
+dense numpy solves of matrices assembled here, or scipy's quadrature; the only library
+answers used are those of :mod:`contactqp.reference` (the exact reference), as a yardstick for
+the solvers' errors. Scenes are built with the library's constructors, never solved by it.
+
+Glossary: E Young's modulus (Pa), A area (m²), L length (m), k = EA/L a stiffness (N/m),
+f a compliance Σ L/(EA) (m/N), F a point load (N), g a gap (m), λ a contact force (N),
+u the displacements (m), K, P, C, g the stiffness, loads, contact rows and gaps.
 """
 
 from __future__ import annotations
@@ -15,67 +23,73 @@ import pytest
 from scipy.integrate import quad
 
 import contactqp
-from contactqp import (
-    Bar,
-    Load,
-    Scene,
-    Support,
-    Wall,
-)
+from contactqp import Bar, Load, Scene, Support, Wall
 from contactqp.methods import qp as qpmod
-from contactqp.model import (
-    Layout,
-)
-from contactqp.reference import (
-    reference,
-)
+from contactqp.model import Layout
+from contactqp.reference import reference
 
-E, F, GAP, LENGTH = 210e9, 565486.67, 1e-4, 1.0
+# --- the default scene, as the problem states it: a 1 m steel cone, 40 mm to 20 mm, fixed at
+# node 0, loaded at mid-length (node 2), a "+" wall 0.1 mm beyond the tip (node 4)
+DEFAULT_E = 210e9  # Pa
+DEFAULT_YIELD = 200e6  # Pa
+DEFAULT_F, DEFAULT_LOAD_NODE = 565486.67, 2  # N
+DEFAULT_GAP, DEFAULT_WALL_NODE = 1e-4, 4  # m
+DEFAULT_LENGTH = 1.0  # m
+DEFAULT_LENGTHS = [0.25] * 4  # m
+DEFAULT_DIAMETERS = [0.040, 0.035, 0.030, 0.025, 0.020]  # m, at nodes 0..4
+DEFAULT_DIAMETERS_MM = [40.0, 35.0, 30.0, 25.0, 20.0]  # the same, in mm
+
+E_STEEL = 210e9  # Pa
+E_SPRINGS = 200e9  # Pa, of spring()'s one-element bars and the distributed-load bars
+HAND_GAP = 1.5e-4  # m, the wall of hand_scene
+
+
+# --- the cone in the continuum
+def diameter(x: float) -> float:
+    return 0.040 - 0.020 * x / DEFAULT_LENGTH
+
+
+def cone_compliance(a: float, b: float) -> float:
+    value, _ = quad(lambda x: 1.0 / (DEFAULT_E * math.pi * diameter(x) ** 2 / 4.0), a, b,
+                    epsabs=0.0, epsrel=1e-13)
+    return value
+
+
+def continuum_force() -> float:
+    """The default scene's contact force in the continuum: (F f(0, L/2) − g) / f(0, L), f the
+    cone's compliance integrated numerically (scipy.integrate.quad, not the library)."""
+    return (DEFAULT_F * cone_compliance(0.0, DEFAULT_LENGTH / 2) - DEFAULT_GAP) / cone_compliance(
+        0.0, DEFAULT_LENGTH)
+
+
+def cone_contact_force() -> float:
+    """The same force from the closed form of the cone's compliance: with d linear,
+    f(a, b) = ∫ₐᵇ 4 dx / (E π d(x)²) = 4 (b − a) / (E π d(a) d(b))."""
+    def compliance(a: float, b: float) -> float:
+        return 4.0 * (b - a) / (DEFAULT_E * math.pi * diameter(a) * diameter(b))
+
+    return (DEFAULT_F * compliance(0.0, DEFAULT_LENGTH / 2) - DEFAULT_GAP) / compliance(
+        0.0, DEFAULT_LENGTH)
 
 
 def cone_like_f() -> float:
     """f of the default 4-element midpoint mesh, from the element areas computed here."""
     mids = [0.0375, 0.0325, 0.0275, 0.0225]
-    return sum(0.25 / (E * math.pi * d**2 / 4) for d in mids)
+    return sum(0.25 / (DEFAULT_E * math.pi * d**2 / 4) for d in mids)
 
 
-HAND_GAP = 1.5e-4  # m
-
-
-def hand_scene(force: float = 3e4, gap: float = HAND_GAP) -> Scene:
-    bar = Bar.from_areas([1e-3, 5e-4], 2e11, lengths=[1.0, 1.0])
-    return Scene(bar, (Support(0),), (Load(2, force),), (Wall(2, gap, "+"),))
-
-
-# The seed scene, as the problem states it
-DEFAULT_E = 210e9  # Pa
-
-
-DEFAULT_YIELD = 200e6  # Pa
-
-
-DEFAULT_F, DEFAULT_LOAD_NODE = 565486.67, 2  # N
-
-
-DEFAULT_GAP, DEFAULT_WALL_NODE = 1e-4, 4  # m
-
-
-DEFAULT_LENGTHS = [0.25] * 4  # m
-
-
-DEFAULT_DIAMETERS = [0.040, 0.035, 0.030, 0.025, 0.020]  # m, at nodes 0..4
-
-
-def seed_areas(area_rule: str) -> list[float]:
-    """Element areas of the seed bar from its diameters (m²)."""
+# --- the default scene, discrete: closed forms
+def default_areas(area_rule: str) -> list[float]:
+    """Element areas of the default bar from its diameters (m²)."""
     pairs = itertools.pairwise(DEFAULT_DIAMETERS)
     if area_rule == "midpoint":
         return [math.pi * ((da + db) / 2) ** 2 / 4 for da, db in pairs]
     return [math.pi * da * db / 4 for da, db in pairs]
 
 
-def seed_scene_with(area_rule: str = "midpoint", force: float = DEFAULT_F,
-                    walls: tuple[Wall, ...] = (Wall(DEFAULT_WALL_NODE, DEFAULT_GAP, "+"),)) -> Scene:
+def default_scene_with(area_rule: str = "midpoint", force: float = DEFAULT_F,
+                       walls: tuple[Wall, ...] = (Wall(DEFAULT_WALL_NODE, DEFAULT_GAP, "+"),)
+                       ) -> Scene:
     bar = Bar.tapered_circle(1.0, 4, 0.040, 0.020, DEFAULT_E, area_rule=area_rule,
                              yield_stress=DEFAULT_YIELD)
     return Scene(bar, (Support(0),), (Load(DEFAULT_LOAD_NODE, force),), walls)
@@ -99,17 +113,25 @@ def cantilever(lengths, areas, modulus, loads, wall, *, contact="inequality", pe
     return [u_free[j] - s * lam * flex[min(w, j)] for j in nodes], lam
 
 
-def seed_closed_form(area_rule="midpoint", force=DEFAULT_F, contact="inequality", penalty=None):
-    return cantilever(DEFAULT_LENGTHS, seed_areas(area_rule), DEFAULT_E, [(DEFAULT_LOAD_NODE, force)],
-                      (DEFAULT_WALL_NODE, DEFAULT_GAP, "+"), contact=contact, penalty=penalty)
+def default_closed_form(area_rule="midpoint", force=DEFAULT_F, contact="inequality",
+                        penalty=None):
+    return cantilever(DEFAULT_LENGTHS, default_areas(area_rule), DEFAULT_E,
+                      [(DEFAULT_LOAD_NODE, force)], (DEFAULT_WALL_NODE, DEFAULT_GAP, "+"),
+                      contact=contact, penalty=penalty)
 
 
-def seed_flexibility(node: int, area_rule: str = "midpoint") -> float:
-    """f_node of the seed bar (m/N)."""
+def default_compliance(node: int, area_rule: str = "midpoint") -> float:
+    """f_node of the default bar (m/N)."""
     return sum(length / (DEFAULT_E * area)
-               for length, area in zip(DEFAULT_LENGTHS[:node], seed_areas(area_rule)[:node]))
+               for length, area in zip(DEFAULT_LENGTHS[:node], default_areas(area_rule)[:node]))
 
 
+def small_force() -> float:
+    """A load that moves the wall node only half way to the wall: F f_2 = g / 2."""
+    return 0.5 * DEFAULT_GAP / default_compliance(DEFAULT_LOAD_NODE)
+
+
+# --- dense algebra and brute force
 def assert_normwise(actual, expected, rel: float) -> None:
     """max |actual − expected| <= rel · max |expected|: how round-off shows in a solve."""
     actual, expected = np.asarray(actual, float), np.asarray(expected, float)
@@ -178,9 +200,34 @@ def brute_force(scene: Scene, contact: str = "inequality"):
     raise AssertionError("no set of walls in contact satisfies the KKT conditions")
 
 
-def small_force() -> float:
-    """A load that moves the wall node only half way to the wall: F f_2 = g / 2."""
-    return 0.5 * DEFAULT_GAP / seed_flexibility(DEFAULT_LOAD_NODE)
+def exact(values) -> list[Fraction]:
+    return [Fraction(float(v)) for v in values]
+
+
+def error(result: contactqp.Result, scene: Scene) -> float:
+    """The result's largest contact-force error, relative to the exact reference's largest
+    force (or the largest load where no wall pushes)."""
+    exact = reference(scene).contact_force
+    scale = np.abs(exact).max() or np.abs(Layout(scene).nodal_loads).max()
+    return float(np.abs(result.contact_force - exact).max()) / scale
+
+
+# --- scenes
+DEFAULT_SCENE = contactqp.default_scene()
+
+BAR = Bar.from_areas([1e-4, 1e-4], 2e11, length=2.0)
+
+EXAMPLES = sorted((Path(__file__).parent.parent / "examples").glob("*.toml"))
+
+
+def hand_scene(force: float = 3e4, gap: float = HAND_GAP) -> Scene:
+    bar = Bar.from_areas([1e-3, 5e-4], 2e11, lengths=[1.0, 1.0])
+    return Scene(bar, (Support(0),), (Load(2, force),), (Wall(2, gap, "+"),))
+
+
+def spring(k: float, length: float = 1.0) -> Bar:
+    """A one-element bar of stiffness k (N/m)."""
+    return Bar.from_areas([k * length / E_SPRINGS], E_SPRINGS, length=length)
 
 
 def fixed_fixed_scene() -> Scene:
@@ -205,65 +252,6 @@ def cantilever_interior_walls_scene() -> Scene:
 
 
 SEVERAL_WALLS = [fixed_fixed_scene, cantilever_interior_walls_scene]
-
-
-QP_PAIRS = [(s.backend, s.solver) for s in contactqp.available_qp_solvers() if s.available]
-
-
-def runs(rng: np.random.Generator) -> list[tuple[str, dict, str]]:
-    """(method, options, formulation) for every method and every installed QP solver."""
-    out = [("lagrange", {}, f) for f in ("full", "condensed", "strain")]
-    out += [("penalty", {}, f) for f in ("full", "condensed")]
-    out += [("augmented", {}, f) for f in ("full", "condensed")]
-    for backend, solver in QP_PAIRS:
-        out.append(("qp", {"backend": backend, "solver": solver,
-                           "accuracy": str(rng.choice(["default", "high"])),
-                           "scale": bool(rng.random() < 0.8)},
-                    str(rng.choice(["full", "condensed", "strain"]))))
-    return out
-
-
-SEED = contactqp.default_scene()
-
-
-BAR = Bar.from_areas([1e-4, 1e-4], 2e11, length=2.0)
-
-
-INSTALLED_SOLVERS = [s for s in contactqp.available_qp_solvers() if s.available]
-
-
-QP_SOLVERS = contactqp.available_qp_solvers()
-
-
-PAIRS = [pytest.param(r, id=f"{r.backend}-{r.solver}") for r in QP_SOLVERS]
-
-
-# Solvers that see the QP through cvxpy's or qpsolvers' second-order-cone rewrite of the
-# objective (t >= ‖Lx‖²): a tolerance ε on that problem leaves an error ~√ε in x and λ.
-SOC_REWRITE = {("cvxpy", "ECOS"), ("cvxpy", "CVXOPT"), ("qpsolvers", "ecos")}
-
-
-TOLERANCE_KEYS = ("eps_abs", "tol_feas", "abstol", "primal_tol", "primal_feasibility_tolerance")
-
-
-def force_rtol(backend: str, solver: str) -> float:
-    """Relative error in λ that accuracy="high" allows (the tests' tolerance for a solver).
-
-    The scaled QP and its multipliers are O(1) (see contactqp.methods.qp), so a solver that
-    stops at residual ε leaves λ/F off by about ε times the condition number of the scaled
-    KKT system, below 1e2 for the scenes here: rtol = 1e3·ε, and 1e-9 for an exact active-set
-    method (ε = round-off). Through a cone rewrite, 10·√ε (SOC_REWRITE).
-    """
-    settings = qpmod.accuracy_settings(solver, "high", backend=backend)
-    eps = min((settings[k] for k in TOLERANCE_KEYS if k in settings), default=1e-12)
-    if (backend, solver) in SOC_REWRITE:
-        return 10.0 * math.sqrt(eps)
-    return max(1e3 * eps, 1e-9)
-
-
-def require(row: contactqp.methods.qp.QPSolverInfo) -> None:
-    if not row.available:
-        pytest.skip(f"{row.backend}/{row.solver} is not installed: {row.install}")
 
 
 def several_walls() -> Scene:
@@ -302,31 +290,17 @@ SCENES = {
 }
 
 
-def spring(k: float, length: float = 1.0) -> Bar:
-    """A one-element bar of stiffness k (N/m)."""
-    return Bar.from_areas([k * length / E_SPRINGS], E_SPRINGS, length=length)
-
-
-def exact(values) -> list[Fraction]:
-    return [Fraction(float(v)) for v in values]
-
-
 def clamped(load: Load) -> Scene:
     """Node 1 between two zero-gap walls, a zero-gap "+" wall at node 2 (test_clamped_node)."""
     return Scene(Bar.from_areas([1e-4, 1e-3], 2e11, length=2.0), (Support(0),), (load,),
                  (Wall(1, 0.0, "+"), Wall(1, 0.0, "-"), Wall(2, 0.0, "+")))
 
 
-EXAMPLES = sorted((Path(__file__).parent.parent / "examples").glob("*.toml"))
-
-
-E_SPRINGS = 200e9
-
-
-E_STEEL = 210e9  # Pa
-
-
-DEFAULT_DIAMETERS_MM = [40.0, 35.0, 30.0, 25.0, 20.0]  # at nodes 0..4 of the seed scene
+def touching() -> Scene:
+    """The default scene with the load that brings node 4 exactly to its wall: F·f₂ = g."""
+    scene = contactqp.default_scene()
+    flexibility = sum(Fraction(1) / Fraction(k) for k in Layout(scene).element_stiffness[:2])
+    return scene.with_loads((Load(2, float(Fraction(scene.walls[0].gap) / flexibility)),))
 
 
 def valid_data() -> dict:
@@ -351,30 +325,47 @@ def with_value(data: dict, path: tuple, value) -> dict:
     return data
 
 
-def touching() -> Scene:
-    """The default scene with the load that brings node 4 exactly to its wall: F·f₂ = g."""
-    scene = contactqp.default_scene()
-    flexibility = sum(Fraction(1) / Fraction(k) for k in Layout(scene).element_stiffness[:2])
-    return scene.with_loads((Load(2, float(Fraction(scene.walls[0].gap) / flexibility)),))
+# --- QP solvers: which are installed, and the accuracy to expect of each
+QP_SOLVERS = contactqp.available_qp_solvers()
+INSTALLED_SOLVERS = [s for s in QP_SOLVERS if s.available]
+QP_PAIRS = [(s.backend, s.solver) for s in INSTALLED_SOLVERS]
+PAIRS = [pytest.param(r, id=f"{r.backend}-{r.solver}") for r in QP_SOLVERS]
+
+# Solvers that see the QP through cvxpy's or qpsolvers' second-order-cone rewrite of the
+# objective (t >= ‖Lx‖²): a tolerance ε on that problem leaves an error ~√ε in x and λ.
+SOC_REWRITE = {("cvxpy", "ECOS"), ("cvxpy", "CVXOPT"), ("qpsolvers", "ecos")}
+
+TOLERANCE_KEYS = ("eps_abs", "tol_feas", "abstol", "primal_tol", "primal_feasibility_tolerance")
 
 
-def error(result: contactqp.Result, scene: Scene) -> float:
-    exact = reference(scene).contact_force
-    scale = np.abs(exact).max() or np.abs(Layout(scene).nodal_loads).max()
-    return float(np.abs(result.contact_force - exact).max()) / scale
+def force_rtol(backend: str, solver: str) -> float:
+    """Relative error in λ that accuracy="high" allows (the tests' tolerance for a solver).
+
+    The scaled QP and its multipliers are O(1) (see contactqp.methods.qp), so a solver that
+    stops at residual ε leaves λ/F off by about ε times the condition number of the scaled
+    KKT system, below 1e2 for the scenes here: rtol = 1e3·ε, and 1e-9 for an exact active-set
+    method (ε = round-off). Through a cone rewrite, 10·√ε (SOC_REWRITE).
+    """
+    settings = qpmod.accuracy_settings(solver, "high", backend=backend)
+    eps = min((settings[k] for k in TOLERANCE_KEYS if k in settings), default=1e-12)
+    if (backend, solver) in SOC_REWRITE:
+        return 10.0 * math.sqrt(eps)
+    return max(1e3 * eps, 1e-9)
 
 
-def diameter(x: float) -> float:
-    return 0.040 - 0.020 * x / LENGTH
+def require(row: contactqp.methods.qp.QPSolverInfo) -> None:
+    if not row.available:
+        pytest.skip(f"{row.backend}/{row.solver} is not installed: {row.install}")
 
 
-def cone_compliance(a: float, b: float) -> float:
-    value, _ = quad(lambda x: 1.0 / (E * math.pi * diameter(x) ** 2 / 4.0), a, b,
-                    epsabs=0.0, epsrel=1e-13)
-    return value
-
-
-def continuum_force() -> float:
-    """The default scene's contact force in the continuum: (F f(0, L/2) − g) / f(0, L), f the
-    cone's compliance integrated numerically (scipy.integrate.quad, not the library)."""
-    return (F * cone_compliance(0.0, LENGTH / 2) - GAP) / cone_compliance(0.0, LENGTH)
+def runs(rng: np.random.Generator) -> list[tuple[str, dict, str]]:
+    """(method, options, formulation) for every method and every installed QP solver."""
+    out = [("lagrange", {}, f) for f in ("full", "condensed", "strain")]
+    out += [("penalty", {}, f) for f in ("full", "condensed")]
+    out += [("augmented", {}, f) for f in ("full", "condensed")]
+    for backend, solver in QP_PAIRS:
+        out.append(("qp", {"backend": backend, "solver": solver,
+                           "accuracy": str(rng.choice(["default", "high"])),
+                           "scale": bool(rng.random() < 0.8)},
+                    str(rng.choice(["full", "condensed", "strain"]))))
+    return out

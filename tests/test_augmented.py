@@ -83,4 +83,3 @@ def test_default_penalty_is_the_stiffest_mode_of_the_walls():
     # every mode's error shrinks >= 101-fold per update: tolerance 1e-10 in a few updates
     assert result.verified and result.iterations <= 10
     assert result.contact_force == pytest.approx(exact.contact_force, rel=1e-8, abs=1e-12)
-

@@ -129,4 +129,3 @@ def test_seed_scene_remeshed(elements, area_rule):
 def test_seed_scene_needs_an_even_number_of_elements(elements):
     with pytest.raises(SceneError, match=r"elements.*got"):
         contactqp.default_scene(elements)
-

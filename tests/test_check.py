@@ -175,4 +175,3 @@ def test_section_residual_is_the_largest_cut(case):
     expected = np.abs(sections).max()
     assert section_residual(np.array(forces), nodes, values) == pytest.approx(
         expected, rel=1e-12, abs=1e-9)
-

@@ -15,7 +15,10 @@ import sys
 import pytest
 
 import contactqp
-from closed_forms import GAP, SEED, E, F
+from closed_forms import DEFAULT_E as E
+from closed_forms import DEFAULT_F as F
+from closed_forms import DEFAULT_GAP as GAP
+from closed_forms import DEFAULT_SCENE
 from contactqp.cli import main
 
 DIAMETERS_MID = [0.0375, 0.0325, 0.0275, 0.0225]  # m, mid-length of 40 → 20 mm over 4 elements
@@ -267,12 +270,12 @@ def test_help_documents_the_exit_statuses(capsys):
 
 def test_what_is_printed_and_written_is_in_the_scenes_units(capsys, tmp_path):
     path = tmp_path / "mm.toml"
-    path.write_text(contactqp.scene_to_toml(contactqp.convert_units(SEED, "mm-N-MPa")))
+    path.write_text(contactqp.scene_to_toml(contactqp.convert_units(DEFAULT_SCENE, "mm-N-MPa")))
     assert main(["solve", str(path), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["units"] == "mm-N-MPa"
     assert data["penetration"][0] == pytest.approx(
-        contactqp.solve(SEED).penetration[0] * 1e3, abs=1e-12)
+        contactqp.solve(DEFAULT_SCENE).penetration[0] * 1e3, abs=1e-12)
     assert main(["solve", str(path)]) == 0
     out = capsys.readouterr().out
     assert "penetration (mm)" in out and "contact force (N)" in out
@@ -299,4 +302,3 @@ def test_curve_cli_table_and_chart(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "first contact closes at t = 0.0703" in out
     assert (tmp_path / "load_path.png").stat().st_size > 0
-

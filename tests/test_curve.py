@@ -17,7 +17,7 @@ from contactqp.scene_io import load_scene
 
 def test_load_path_kink_at_the_closed_form_load():
     """Default scene: the tip moves as node 2 does (nothing loads the elements past it), so the
-    wall is reached at t* = g / (F Σ_{e<2} L_e/(E_SPRINGS A_e)), areas at the mid-length diameters."""
+    wall is reached at t* = g / (F Σ_{e<2} L_e/(E A_e)), areas at the mid-length diameters."""
     L_e, F, g = 0.25, 565486.67, 1e-4
     diameters = 0.040 - 0.020 * (np.array([0.5, 1.5]) * L_e)  # mid-length of elements 0 and 1
     flexibility = np.sum(L_e / (210e9 * np.pi * diameters**2 / 4))
@@ -53,4 +53,3 @@ def test_load_path_steps_match_separate_solves():
         assert result.verified
         assert result.contact_force == pytest.approx(alone.contact_force, rel=1e-10, abs=1e-6)
         assert result.u == pytest.approx(alone.u, rel=1e-10, abs=1e-15)
-

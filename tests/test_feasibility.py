@@ -10,8 +10,8 @@ import pytest
 import contactqp
 from closed_forms import (
     BAR,
-    SEED,
-    seed_scene_with,
+    DEFAULT_SCENE,
+    default_scene_with,
 )
 from contactqp import (
     BarContact,
@@ -27,7 +27,7 @@ def two_bars_with(walls, contacts) -> Scene:
 
 
 def test_equality_with_walls_on_both_sides_of_one_node_is_refused():
-    scene = seed_scene_with(walls=(Wall(3, 1e-4, "+"), Wall(3, 1e-4, "-")))
+    scene = default_scene_with(walls=(Wall(3, 1e-4, "+"), Wall(3, 1e-4, "-")))
     with pytest.raises(OptionError, match=r"node 3"):
         contactqp.solve(scene, "lagrange", "equality")
 
@@ -37,7 +37,7 @@ def test_walls_that_leave_a_node_no_position_are_refused(plus, minus):
     """"+" wall: u <= plus; "−" wall: u >= −minus. No u when plus + minus < 0 (two press fits,
     or u <= 1e-4 and u >= 2e-4)."""
     with pytest.raises(contactqp.SceneError) as error:
-        SEED.with_walls((Wall(4, plus, "+"), Wall(4, minus, "-")))
+        DEFAULT_SCENE.with_walls((Wall(4, plus, "+"), Wall(4, minus, "-")))
     message = str(error.value)
     assert f"wall[0] (u ≤ {plus:g} m at node 4)" in message
     assert f"wall[1] (u ≥ {-minus:g} m at node 4)" in message
@@ -46,7 +46,7 @@ def test_walls_that_leave_a_node_no_position_are_refused(plus, minus):
 
 def test_walls_that_just_clamp_a_node_are_a_scene():
     """plus + minus = 0: one position, u = plus, which both walls allow."""
-    scene = SEED.with_walls((Wall(4, 1e-4, "+"), Wall(4, -1e-4, "-")))
+    scene = DEFAULT_SCENE.with_walls((Wall(4, 1e-4, "+"), Wall(4, -1e-4, "-")))
     result = contactqp.solve(scene)
     assert result.u[4] == pytest.approx(1e-4, rel=1e-12)  # held at the one position
     assert result.verified
@@ -73,4 +73,3 @@ def test_equality_through_a_bar_contact_that_fixes_a_node_twice_is_refused():
     with pytest.raises(contactqp.OptionError) as error:
         contactqp.solve(scene, contact="equality")
     assert all(name in str(error.value) for name in ("wall[0]", "wall[1]", "contact[0]"))
-

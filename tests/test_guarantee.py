@@ -1,8 +1,9 @@
 """``verified`` means right: every method and solver, held to the check's bound on random scenes.
 
-The guarantee (contactqp.result): a verified Result has every contact force within 1e-5·F of
+The guarantee (contactqp.check): a verified Result has every contact force within 1e-5·F of
 the exact answer and every displacement within 1e-5·U (GUARANTEE), F and U the scene's own
-scales; its ``force_error_bound`` (N) and ``displacement_error_bound`` (m) estimate the error. The exact answer comes from contactqp.reference (statics in extended
+scales; its ``force_error_bound`` (N) and ``displacement_error_bound`` (m) estimate the error.
+The exact answer comes from contactqp.reference (statics in extended
 precision for one bar with walls, exact rational arithmetic otherwise; itself tested against
 closed forms, Fractions and brute force in test_reference.py), never from a method under test.
 
@@ -140,4 +141,3 @@ def test_the_issue_penalty_scene_is_flagged():
     assert default.verified
     # the same closed form at ε = 1e6·k₀: 1.1e6 / (1 + 1e-6), a few ulp of round-off
     assert default.contact_force[0] == pytest.approx(1.1e6 * 1e6 / (1e6 + 1.0), rel=1e-12)
-

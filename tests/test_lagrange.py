@@ -42,10 +42,10 @@ from closed_forms import (
     assert_normwise,
     brute_force,
     cantilever,
+    default_areas,
+    default_closed_form,
+    default_scene_with,
     dense_algebra,
-    seed_areas,
-    seed_closed_form,
-    seed_scene_with,
 )
 from contactqp import (
     Bar,
@@ -127,8 +127,8 @@ def small_scenes(draw) -> Scene:
 @pytest.mark.parametrize("area_rule", ["midpoint", "exact"])
 @pytest.mark.parametrize("contact", ["inequality", "equality"])
 def test_seed_scene_lagrange_matches_closed_form(area_rule, contact):
-    result = contactqp.solve(seed_scene_with(area_rule), "lagrange", contact)
-    u, lam = seed_closed_form(area_rule, contact=contact)
+    result = contactqp.solve(default_scene_with(area_rule), "lagrange", contact)
+    u, lam = default_closed_form(area_rule, contact=contact)
     assert lam > 0.0  # the load drives the tip through the gap: contact closes either way
     # κ(K) ~ 10 on four elements: a direct solve agrees with the closed form to ~1e-15
     assert_normwise(result.u, u, rel=1e-12)
@@ -199,11 +199,11 @@ def test_several_walls_equality_matches_brute_force(make_scene):
 
 def test_walls_on_both_sides_of_one_node_with_inequality():
     # the "+" wall stops node 3; the "-" wall behind it stays open
-    scene = seed_scene_with(walls=(Wall(3, 1e-4, "+"), Wall(3, 2e-4, "-")))
+    scene = default_scene_with(walls=(Wall(3, 1e-4, "+"), Wall(3, 2e-4, "-")))
     u, _, active = brute_force(scene)
     assert active == [0]
     result = contactqp.solve(scene, "lagrange", "inequality")
-    closed_u, closed_lam = cantilever(DEFAULT_LENGTHS, seed_areas("midpoint"), DEFAULT_E,
+    closed_u, closed_lam = cantilever(DEFAULT_LENGTHS, default_areas("midpoint"), DEFAULT_E,
                                       [(DEFAULT_LOAD_NODE, DEFAULT_F)], (3, 1e-4, "+"))
     # κ(K) ~ 10: a direct solve is exact to ~1e-15
     assert_normwise(result.u, closed_u, rel=1e-12)
@@ -263,4 +263,3 @@ def test_hundred_thousand_elements_match_the_cone():
     assert result.contact_force[0] == pytest.approx(lam, rel=1e-6)
     assert_normwise(result.u, u, rel=1e-6)  # as above
     assert result.u.size == n + 1
-

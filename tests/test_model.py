@@ -1,5 +1,6 @@
-"""The model (contactqp.model): the layout's arrays, the solves with K (statics and banded),
-the condensed problem and the strain formulation's tie rows.
+"""The model (contactqp.model): the layout's arrays (the nodal loads of a distributed load, the
+stiffness a wall sees), the solves with K (statics and banded), the condensed problem and the
+strain formulation's tie rows.
 
 Glossary: K stiffness matrix of the free nodes, C contact rows, g gaps; S = B K⁻¹ Bᵀ the
 compliance between the contact nodes (B selects them); B u − e = 0 the tie rows of the strain
@@ -14,7 +15,7 @@ import pytest
 import contactqp
 from closed_forms import (
     E_SPRINGS,
-    continuum_force,
+    cone_contact_force,
 )
 from contactqp import (
     Bar,
@@ -102,7 +103,7 @@ def test_a_million_element_bar_is_exact_to_round_off():
                             (contactqp.Wall(n, seed.walls[0].gap, "+"),))
     result = contactqp.solve(scene, formulation="condensed")
     assert result.verified
-    assert result.contact_force[0] == pytest.approx(continuum_force(), rel=1e-12)
+    assert result.contact_force[0] == pytest.approx(cone_contact_force(), rel=1e-12)
 
 
 def test_distributed_load_on_part_of_a_bar_and_its_nodal_forces():
@@ -114,4 +115,3 @@ def test_distributed_load_on_part_of_a_bar_and_its_nodal_forces():
     assert result.reactions[0] == pytest.approx(-500.0)
     # N(x) = q (0.6 − x) on the loaded part; an element's k·Δu is its mean over the element
     assert result.element_force == pytest.approx([500.0, 400.0, 150.0, 0.0], abs=1e-9)
-

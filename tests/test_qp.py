@@ -1,5 +1,5 @@
-"""The QP method (contactqp.methods.qp): every installed backend and solver against the explicit Lagrange method and
-against equilibrium computed here from the displacements alone.
+"""The QP method (contactqp.methods.qp): every installed backend and solver against the explicit
+Lagrange method and against equilibrium computed here from the displacements alone.
 
 Symbols
 -------
@@ -20,11 +20,11 @@ import pytest
 
 import contactqp
 from closed_forms import (
+    DEFAULT_SCENE,
     INSTALLED_SOLVERS,
     PAIRS,
     QP_SOLVERS,
     SCENES,
-    SEED,
     SOC_REWRITE,
     both_sides,
     force_rtol,
@@ -128,7 +128,7 @@ def test_unknown_qp_formulation_names_the_value():
 def test_no_solver_prints_anything(capfd, info):
     """On an open gap (OSQP's "Polishing not needed") and on the default scene, at both
     accuracies, through file descriptors 1 and 2 (C code included)."""
-    for scene in (SEED.with_walls((Wall(4, 2e-3),)), SEED):
+    for scene in (DEFAULT_SCENE.with_walls((Wall(4, 2e-3),)), DEFAULT_SCENE):
         for accuracy in ("default", "high"):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # Python warnings are not printing
@@ -139,7 +139,7 @@ def test_no_solver_prints_anything(capfd, info):
 
 
 def test_verbose_lets_the_solver_talk(capfd):
-    contactqp.solve(SEED, "qp", backend="osqp", verbose=True)
+    contactqp.solve(DEFAULT_SCENE, "qp", backend="osqp", verbose=True)
     out, _ = capfd.readouterr()
     assert "OSQP" in out
 
@@ -383,7 +383,6 @@ def test_dense_solvers_are_not_attempted_on_a_long_bar(monkeypatch):
     result = contactqp.solve(method="qp", backend="qpsolvers", solver="quadprog")
     assert not result.claimed_success and not result.verified
     assert result.status.startswith("not attempted")
-
 
 
 def test_the_readme_shows_the_accuracy_table_as_it_is():

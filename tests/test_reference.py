@@ -24,9 +24,10 @@ from scipy.optimize import lsq_linear
 
 import contactqp
 from closed_forms import (
+    E_STEEL,
     cantilever,
     clamped,
-    continuum_force,
+    cone_contact_force,
     exact,
     spring,
 )
@@ -52,8 +53,6 @@ from contactqp.reference_exact import (
 )
 from contactqp.scene import DistributedLoad
 from contactqp.scene_io import load_scene
-
-E_STEEL_R = 210e9
 
 
 def bounded_least_squares(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
@@ -81,7 +80,7 @@ def bounded_least_squares(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
 def wall_scenes(draw):
     n = draw(st.integers(3, 12))
     areas = draw(st.lists(st.floats(1e-4, 1e-3), min_size=n, max_size=n))
-    bar = Bar.from_areas(areas, E_STEEL_R, length=1.0)
+    bar = Bar.from_areas(areas, E_STEEL, length=1.0)
     supports = sorted(set(draw(st.lists(st.integers(0, n), min_size=1, max_size=2))))
     free = [j for j in range(n + 1) if j not in supports]
     loads = tuple(Load(j, draw(st.floats(-5e5, 5e5).filter(lambda f: abs(f) > 1e3)))
@@ -121,7 +120,7 @@ def contact_scenes(draw, max_bars: int = 3, contacts: bool = True) -> Scene:
     At most 8 contact rows (the brute force's 2⁸ sets).
     Gaps are drawn relative to a displacement the loads can cause, so contacts open, close
     and touch."""
-    bars = [Bar.from_areas(draw(st.lists(log_uniform(1e-6, 1e-1), min_size=n, max_size=n)), E_STEEL_R,
+    bars = [Bar.from_areas(draw(st.lists(log_uniform(1e-6, 1e-1), min_size=n, max_size=n)), E_STEEL,
                            lengths=draw(st.lists(st.floats(0.1, 1.0), min_size=n, max_size=n)))
             for n in draw(st.lists(st.integers(1, 6), min_size=1, max_size=max_bars))]
     nodes = [(b, j) for b, bar in enumerate(bars) for j in range(bar.n_nodes)]
@@ -215,9 +214,9 @@ TOLERANCE = 1e-7
 
 def test_matches_the_continuum_on_a_bar_with_exact_areas():
     # exact areas make every node of the discrete bar exact: λ = (F f(0, L/2) − g) / f(0, L)
-    bar = Bar.tapered_circle(1.0, 10_000, 0.040, 0.020, E_STEEL_R, area_rule="exact")
+    bar = Bar.tapered_circle(1.0, 10_000, 0.040, 0.020, E_STEEL, area_rule="exact")
     scene = Scene(bar, (Support(0),), (Load(5_000, 565486.67),), (Wall(10_000, 1e-4),))
-    exact = continuum_force()
+    exact = cone_contact_force()
     assert reference(scene).contact_force[0] == pytest.approx(exact, rel=1e-14)
 
 
@@ -226,11 +225,11 @@ def test_matches_the_continuum_on_a_bar_with_exact_areas():
 def test_matches_exact_rational_arithmetic(load, gap, side):
     areas = [1.1e-3, 8.3e-4, 5.9e-4, 4.0e-4, 3.3e-4]
     lengths = [0.2, 0.3, 0.1, 0.25, 0.15]
-    scene = Scene(Bar.from_areas(areas, E_STEEL_R, lengths=lengths), (Support(0),), (Load(2, load),),
+    scene = Scene(Bar.from_areas(areas, E_STEEL, lengths=lengths), (Support(0),), (Load(2, load),),
                   (Wall(5, gap, side),))
     # the closed form in Fractions, from the same float data read exactly
     u, lam = cantilever([Fraction(x) for x in lengths], [Fraction(a) for a in areas],
-                        Fraction(E_STEEL_R), [(2, Fraction(load))], (5, Fraction(gap), side))
+                        Fraction(E_STEEL), [(2, Fraction(load))], (5, Fraction(gap), side))
     found = reference(scene)
     assert found.contact_force[0] == pytest.approx(float(lam), rel=1e-15, abs=1e-12)
     assert found.displacement == pytest.approx([float(x) for x in u], rel=1e-15, abs=1e-20)
@@ -284,7 +283,7 @@ def test_two_bars_closed_form(k1, k2, gap, load):
 
 def test_the_two_bar_example_carries_its_stated_force():
     # examples/two_bars.toml: λ = (50e3 − 2e8 · 1e-4) · 5e7 / 2.5e8 = 6000 N, to the rounding
-    # of E_STEEL_R·A/L in floats (~1e-16)
+    # of E·A/L in floats (~1e-16)
     scene = load_scene(Path(__file__).parent.parent / "examples" / "two_bars.toml")
     assert reference(scene).contact_force[0] == pytest.approx(6000.0, rel=1e-14)
 
@@ -295,12 +294,12 @@ def test_distributed_load_with_a_wall(path):
     would move qL²/(2EA) (consistent nodal loads make the nodes exact), so
     λ = (qL²/(2EA) − g)·EA/L and u(x) = q(Lx − x²/2)/EA − λx/EA."""
     q, L, area, n, gap = 4e4, 2.0, 1e-4, 10, 1e-4
-    bar = Bar.from_areas(np.full(n, area), E_STEEL_R, length=L)
+    bar = Bar.from_areas(np.full(n, area), E_STEEL, length=L)
     scene = Scene(bar, (Support(0),), distributed=(DistributedLoad(q),), walls=(Wall(n, gap),))
-    EA = E_STEEL_R * area
+    EA = E_STEEL * area
     lam = (q * L**2 / (2 * EA) - gap) * EA / L
     found = path(scene)
-    # the scene's floats (L/n, E_STEEL_R·A/(L/n), q·L_e/2) are rounded at 1.1e-16 each; λ sums ten
+    # the scene's floats (L/n, E·A/(L/n), q·L_e/2) are rounded at 1.1e-16 each; λ sums ten
     # elements' worth and loses a factor 1.03 to cancellation (qL²/(2EA) = 40 g): ≲ 1e-14
     assert found.contact_force[0] == pytest.approx(lam, rel=1e-13)
     x = bar.node_x
@@ -360,7 +359,7 @@ def test_a_scene_where_the_textbook_loop_cycles(max_steps):
 
 def test_refuses_to_enumerate_too_many_rows():
     # with max_steps=1 neither loop finishes, and 2^24 active sets on 14 nodes exceed the budget
-    bars = (Bar.from_areas([1e-4] * 6, E_STEEL_R, length=1.0),) * 2
+    bars = (Bar.from_areas([1e-4] * 6, E_STEEL, length=1.0),) * 2
     walls = tuple(Wall(j, 1e-5 * j, side, b) for b in (0, 1) for j in range(1, 7)
                   for side in "+-")
     scene = Scene(bars, (Support(0, 0), Support(0, 1)), (Load(6, 1e6, 0), Load(6, -1e6, 1)),
@@ -373,7 +372,7 @@ def test_refuses_to_enumerate_too_many_rows():
 
 def test_refuses_scenes_beyond_the_rational_size_limit():
     n = MAX_EXACT_NODES // 2
-    bars = (Bar.from_areas([1e-4] * n, E_STEEL_R, length=1.0),) * 2  # 2(n + 1) nodes
+    bars = (Bar.from_areas([1e-4] * n, E_STEEL, length=1.0),) * 2  # 2(n + 1) nodes
     scene = Scene(bars, (Support(0, 0), Support(0, 1)), contacts=(BarContact(0, n, 1, 0, 0.0),))
     with pytest.raises(SceneError) as raised:
         reference(scene)
@@ -417,4 +416,3 @@ def test_rational_and_statics_paths_agree_on_one_bar(scene):
     # 1e-13 of F and U: a wall that touches to within that may go either way, by ≲ 1e-13
     assert np.abs(rational.displacement - statics.displacement).max() <= 1e-12 * U
     assert np.abs(rational.contact_force - statics.contact_force).max(initial=0.0) <= 1e-12 * F
-

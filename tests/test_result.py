@@ -11,12 +11,12 @@ import pytest
 import contactqp
 from closed_forms import (
     DEFAULT_F,
+    DEFAULT_SCENE,
     DEFAULT_YIELD,
-    SEED,
     assert_normwise,
+    default_areas,
+    default_closed_form,
     hand_scene,
-    seed_areas,
-    seed_closed_form,
 )
 
 
@@ -46,8 +46,8 @@ def test_result_to_json(method, contact):
 
 def test_seed_scene_warns_of_stress_beyond_yield():
     result = contactqp.solve()
-    _, lam = seed_closed_form()
-    areas = seed_areas("midpoint")
+    _, lam = default_closed_form()
+    areas = default_areas("midpoint")
     # elements 0 and 1 carry F − λ in tension, 2 and 3 carry λ in compression
     forces = [DEFAULT_F - lam, DEFAULT_F - lam, -lam, -lam]
     stress = [force / area for force, area in zip(forces, areas)]
@@ -73,8 +73,7 @@ def test_the_yield_check_works_in_both_unit_systems():
     lam = (F * sum(flexibility[:2]) - gap) / sum(flexibility)
     stress = (F - lam) / (math.pi * 0.0325**2 / 4)  # Pa
     for units in ("SI", "mm-N-MPa"):
-        result = contactqp.solve(contactqp.convert_units(SEED, units))
+        result = contactqp.solve(contactqp.convert_units(DEFAULT_SCENE, units))
         warning = next(w for w in result.warnings if w.startswith("stress beyond yield"))
         assert f"element 1 carries {stress / 1e6:.1f} MPa" in warning, warning
         assert result.stress_ratio == pytest.approx(stress / 200e6, rel=1e-12)  # ulps
-

@@ -169,4 +169,3 @@ def test_bad_array_value_is_shown_as_the_user_wrote_it():
 def test_scene_error_is_a_value_error_and_a_contactqp_error():
     assert issubclass(SceneError, ValueError)
     assert issubclass(SceneError, contactqp.ContactqpError)
-

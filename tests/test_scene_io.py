@@ -13,8 +13,8 @@ import pytest
 import contactqp
 from closed_forms import (
     DEFAULT_DIAMETERS_MM,
+    DEFAULT_SCENE,
     EXAMPLES,
-    SEED,
     valid_data,
     with_value,
 )
@@ -141,7 +141,7 @@ BAD_DATA = [
 
 def test_a_scene_file_declares_its_units(tmp_path):
     """The default scene in mm, N, MPa: lengths in mm, areas in mm², E in MPa, gaps in mm."""
-    text = contactqp.scene_to_toml(contactqp.convert_units(SEED, "mm-N-MPa"))
+    text = contactqp.scene_to_toml(contactqp.convert_units(DEFAULT_SCENE, "mm-N-MPa"))
     assert 'units = "mm-N-MPa"' in text
     path = tmp_path / "mm.toml"
     path.write_text(text)
@@ -296,4 +296,3 @@ def test_missing_file(tmp_path: Path):
     path = tmp_path / "nowhere.toml"
     with pytest.raises(SceneError, match=r"nowhere\.toml.*does not exist"):
         contactqp.load_scene(path)
-

@@ -185,4 +185,3 @@ def test_many_walls_on_a_fine_mesh_are_right_or_flagged():
         assert_right_or_flagged(run_quietly(scene, "qp", accuracy=accuracy), scene)
     augmented = contactqp.solve(scene, "augmented")
     assert augmented.verified and error(augmented, scene) <= 1e-8
-

@@ -18,4 +18,3 @@ def test_penalty_sweep_shows_augmentation_beating_the_penalty():
     assert sweep.force_error[middle] == pytest.approx(1 / (1 + 1e10 * cone_like_f()), rel=1e-3)
     assert sweep.augmented_error[middle] < 1e-10
     assert sweep.augmented_iterations[middle] > 1
-

@@ -12,7 +12,7 @@ import pytest
 import contactqp
 from closed_forms import (
     BAR,
-    SEED,
+    DEFAULT_SCENE,
 )
 from contactqp import (
     Bar,
@@ -27,33 +27,33 @@ BAD_CALLS = [  # (what, call, words the message must contain)
     ("area a boolean", lambda: Bar.from_areas([True], 2e11, length=1.0), ["bar.areas[0]", "True"]),
     ("area as text", lambda: Bar.from_areas([1e-4, "1e-4"], 2e11, length=1.0),
      ["bar.areas[1]", "'1e-4'"]),
-    ("max_iterations text", lambda: contactqp.solve(SEED, max_iterations="abc"),
+    ("max_iterations text", lambda: contactqp.solve(DEFAULT_SCENE, max_iterations="abc"),
      ["max_iterations", "'abc'"]),
-    ("max_iterations NaN", lambda: contactqp.solve(SEED, max_iterations=math.nan),
+    ("max_iterations NaN", lambda: contactqp.solve(DEFAULT_SCENE, max_iterations=math.nan),
      ["max_iterations", "nan"]),
-    ("max_iterations 2.5", lambda: contactqp.solve(SEED, "penalty", max_iterations=2.5),
+    ("max_iterations 2.5", lambda: contactqp.solve(DEFAULT_SCENE, "penalty", max_iterations=2.5),
      ["max_iterations", "2.5"]),
-    ("max_iterations 0", lambda: contactqp.solve(SEED, max_iterations=0), ["max_iterations", "0"]),
-    ("max_iterations -1", lambda: contactqp.solve(SEED, "augmented", max_iterations=-1),
+    ("max_iterations 0", lambda: contactqp.solve(DEFAULT_SCENE, max_iterations=0), ["max_iterations", "0"]),
+    ("max_iterations -1", lambda: contactqp.solve(DEFAULT_SCENE, "augmented", max_iterations=-1),
      ["max_iterations", "-1"]),
-    ("tolerance -1", lambda: contactqp.solve(SEED, "augmented", tolerance=-1),
+    ("tolerance -1", lambda: contactqp.solve(DEFAULT_SCENE, "augmented", tolerance=-1),
      ["tolerance", "-1"]),
-    ("tolerance NaN", lambda: contactqp.solve(SEED, "augmented", tolerance=math.nan),
+    ("tolerance NaN", lambda: contactqp.solve(DEFAULT_SCENE, "augmented", tolerance=math.nan),
      ["tolerance", "nan"]),
-    ("tolerance text", lambda: contactqp.solve(SEED, "augmented", tolerance="x"),
+    ("tolerance text", lambda: contactqp.solve(DEFAULT_SCENE, "augmented", tolerance="x"),
      ["tolerance", "'x'"]),
-    ("penalty True", lambda: contactqp.solve(SEED, "penalty", penalty=True), ["penalty", "True"]),
-    ("method a list", lambda: contactqp.solve(SEED, ["lagrange"]), ["method", "['lagrange']"]),
+    ("penalty True", lambda: contactqp.solve(DEFAULT_SCENE, "penalty", penalty=True), ["penalty", "True"]),
+    ("method a list", lambda: contactqp.solve(DEFAULT_SCENE, ["lagrange"]), ["method", "['lagrange']"]),
     ("scene a number", lambda: contactqp.solve(3), ["scene", "int"]),
-    ("verbose text", lambda: contactqp.solve(SEED, "qp", verbose="yes"), ["verbose", "'yes'"]),
+    ("verbose text", lambda: contactqp.solve(DEFAULT_SCENE, "qp", verbose="yes"), ["verbose", "'yes'"]),
     ("too many elements", lambda: Bar.tapered_circle(1.0, 10**12, 0.04, 0.02, 2e11),
      ["bar.elements", "1000000000000"]),
     ("E 1e300", lambda: Bar.from_areas([1e10], 1e300, length=1.0),
      ["youngs_modulus", "1e+300"]),
-    ("load 1e308", lambda: SEED.with_loads((Load(2, 1e308),)), ["load[0].force", "1e+308"]),
+    ("load 1e308", lambda: DEFAULT_SCENE.with_loads((Load(2, 1e308),)), ["load[0].force", "1e+308"]),
     ("name a number", lambda: Scene(BAR, (Support(0),), name=3), ["name", "3"]),
     ("units unknown", lambda: Scene(BAR, (Support(0),), units="inch"), ["units", "'inch'"]),
-    ("check with a short u", lambda: contactqp.check(SEED, [0.0], [0.0], [0.0], "inequality"),
+    ("check with a short u", lambda: contactqp.check(DEFAULT_SCENE, [0.0], [0.0], [0.0], "inequality"),
      ["u", "5"]),
 ]
 
@@ -68,4 +68,3 @@ def test_bad_python_input_is_one_clear_error(what, call, words):
     assert "\n" not in message
     for word in words:
         assert word in message, message
-
