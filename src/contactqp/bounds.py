@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from contactqp.model import Layout, largest, penetration, seen_stiffness
+from contactqp.model import Layout, in_set, largest, node_set, penetration, seen_stiffness
 
 ROUND_OFF = 4.0 * np.finfo(float).eps  # a few units in the last place of what is stored
 
@@ -41,7 +41,7 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     pen = penetration(layout, u)
     equality = contact == "equality"
     pushing = _pushing(layout, lam, pen, hold * F, equality)
-    held = np.unique(np.concatenate((layout.support_nodes, row_nodes[pushing[rows]])))
+    held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[pushing[rows]])
     s, s_ends = row_stiffness(layout, held, pushing, ends=True)
     delta = np.abs(pen) if equality else np.where(pushing, np.abs(pen), np.maximum(pen, 0.0))
     moved = np.where(pushing, 0.0, lam)  # an open row's force (or a pull) becomes a load
@@ -98,7 +98,7 @@ def _pushing(layout: Layout, lam: np.ndarray, pen: np.ndarray, hold: float,
     if equality:
         return np.ones(gaps.size, dtype=bool)
     strong = lam > hold
-    held = np.unique(np.concatenate((layout.support_nodes, row_nodes[strong[rows]])))
+    held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[strong[rows]])
     s = row_stiffness(layout, held, strong)
     return lam > np.maximum(-pen, 0.0) * s
 
@@ -124,8 +124,8 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray, nodes: np.nda
         return 0.0, 0.0
     r = (links + outside[:-1])[element]
     compliance = 1.0 / k[element]
-    bar = np.searchsorted(offsets, element, side="right") - 1
-    position = np.searchsorted(held, element, side="right")  # held nodes at or before the start
+    bar = layout.bar_of(element)
+    position = _count_at_or_before(layout.n_nodes, held, element)  # held nodes up to the start
     first, last = offsets[bar], offsets[bar + 1] - 1
     left_held = (position > 0) & (held[np.maximum(position - 1, 0)] >= first)
     right_held = (position < held.size) & (held[np.minimum(position, held.size - 1)] <= last)
@@ -160,6 +160,16 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray, nodes: np.nda
     return largest(c_left - c_right), sway
 
 
+def _count_at_or_before(n_nodes: int, held: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """np.searchsorted(held, nodes, side="right") for node numbers (``held`` sorted,
+    distinct): by one running count over the chain when ``nodes`` are many."""
+    if 8 * np.size(nodes) <= n_nodes:
+        return np.searchsorted(held, nodes, side="right")
+    mask = np.zeros(n_nodes, dtype=np.intp)
+    mask[held] = 1
+    return np.cumsum(mask)[nodes]
+
+
 def _contact_give(layout: Layout, held: np.ndarray, pushing: np.ndarray) -> float:
     """The largest 1/(s_a + s_b) (m/N) over the pushing bar contacts: how far a unit force
     error moves the two ends of a contact together, s_a and s_b the stiffness each end sees
@@ -187,11 +197,11 @@ def gap_moves(layout: Layout, held: np.ndarray, nodes: np.ndarray, delta: np.nda
     δ(1/c_l + 1/c_r) and each neighbour's by δ/c. The two ends of a pushing bar contact move
     together: each moves by its own δ and the other end's. A moved node that is not held (an
     open contact that penetrates) counts as held."""
-    moving = np.unique(np.concatenate((held, nodes[delta > 0.0])))
+    moving = node_set(layout.n_nodes, held, nodes[delta > 0.0])
     if moving.size == 0:
         return 0.0, 0.0, (moving, np.zeros(0))
     by_node = np.zeros(moving.size)
-    listed = np.isin(nodes, moving)
+    listed = in_set(layout.n_nodes, nodes, moving)
     np.maximum.at(by_node, np.searchsorted(moving, nodes[listed]), delta[listed])
     n_walls = len(layout.scene.walls)
     tied = [(int(np.searchsorted(moving, layout.node(c.bar_a, c.node_a))),
@@ -227,9 +237,9 @@ def _closing(layout: Layout, moves: tuple[np.ndarray, np.ndarray], row_nodes: np
     held, shift = moves
     if held.size == 0 or not np.isfinite(stand_off).any():
         return 0.0
-    bar = np.searchsorted(layout.node_offsets, row_nodes, side="right") - 1
-    held_bar = np.searchsorted(layout.node_offsets, held, side="right") - 1
-    after = np.searchsorted(held, row_nodes, side="right")
+    bar = layout.bar_of(row_nodes)
+    held_bar = layout.bar_of(held)
+    after = _count_at_or_before(layout.n_nodes, held, row_nodes)
     left, right = np.maximum(after - 1, 0), np.minimum(after, held.size - 1)
     induced = np.maximum(np.where((after > 0) & (held_bar[left] == bar), shift[left], 0.0),
                          np.where((after < held.size) & (held_bar[right] == bar), shift[right],
@@ -250,7 +260,7 @@ def row_stiffness(layout: Layout, held: np.ndarray, pushing: np.ndarray,
     node_stiffness = seen_stiffness(layout, held, row_nodes)
     n_walls = len(layout.scene.walls)
     rigid = np.concatenate((layout.support_nodes, row_nodes[:n_walls][pushing[:n_walls]]))
-    fixed = (rows >= n_walls) & np.isin(row_nodes, rigid)
+    fixed = (rows >= n_walls) & in_set(layout.n_nodes, row_nodes, rigid)
     # both ends held: the contact closes only as a wall gives, at that end's own stiffness
     fixed &= np.bincount(rows[fixed], minlength=gaps.size)[rows] < 2
     node_stiffness[fixed] = np.inf
@@ -269,7 +279,7 @@ def _both_sides(layout: Layout, lam: np.ndarray) -> float:
     each loop free of it)."""
     rows, nodes, coefficients, gaps = layout.rows
     force = np.maximum(lam, 0.0)
-    free = ~np.isin(nodes, layout.support_nodes)
+    free = ~in_set(layout.n_nodes, nodes, layout.support_nodes)
     entries = np.bincount(rows[free], minlength=gaps.size)
     single = free & (entries[rows] == 1)  # a wall, or a contact with one end held
     plus = np.zeros(layout.n_nodes)

@@ -27,7 +27,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from contactqp.errors import SceneError
-from contactqp.model import Layout
 from contactqp.scene import Scene
 
 CERTIFICATE = 1e-13  # relative: the arithmetic is ~1e-19, this leaves room for n up to 1e6
@@ -108,7 +107,7 @@ def statics_reference(scene: Scene, max_steps: int | None = None) -> Reference:
                          f"only; it has {len(scene.bars)} bars and {len(scene.contacts)} bar "
                          "contacts (the rational reference takes them)")
     real = np.longdouble
-    layout = Layout(scene)
+    layout = scene.layout
     k = layout.element_stiffness.astype(real)
     P = layout.nodal_loads.astype(real)
     supports = np.unique(layout.support_nodes)

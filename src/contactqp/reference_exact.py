@@ -41,7 +41,6 @@ from itertools import combinations
 import numpy as np
 
 from contactqp.errors import SceneError
-from contactqp.model import Layout
 from contactqp.reference import Reference
 from contactqp.scene import Scene
 
@@ -116,7 +115,7 @@ class _ExactScene:
 
     @classmethod
     def of(cls, scene: Scene) -> _ExactScene:
-        layout = Layout(scene)
+        layout = scene.layout
         rows: list[list[tuple[int, int]]] = [[] for _ in range(scene.n_contacts)]
         row_ids, nodes, values, gaps = layout.rows
         for r, node, value in zip(row_ids.tolist(), nodes.tolist(), values.tolist()):
@@ -278,7 +277,7 @@ def rational_reference(scene: Scene, max_steps: int | None = None) -> Reference:
     arithmetic (module docstring). ``max_steps`` (default 2·rows + 10) bounds the textbook
     loop, and the primal loop after it; then every independent active set is tried when
     2^rows · nodes² is at most ``ENUMERATION_BUDGET``, else a SceneError."""
-    n_nodes = Layout(scene).n_nodes
+    n_nodes = scene.layout.n_nodes
     if n_nodes > MAX_EXACT_NODES:
         raise SceneError(f"scene {scene.name!r} has {n_nodes} nodes; the exact rational "
                          f"reference takes at most {MAX_EXACT_NODES} (one bar with walls only "

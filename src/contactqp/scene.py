@@ -13,13 +13,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from contactqp.errors import SceneError
 from contactqp.units import UNIT_SYSTEMS, Units
 from contactqp.values import number, positive_numbers, whole_number
+
+if TYPE_CHECKING:
+    from contactqp.model.layout import Layout
 
 AreaRule = Literal["midpoint", "exact"]
 WallSide = Literal["+", "-"]
@@ -262,6 +265,14 @@ class Scene:
         conflict = impossible_constraints(self) or indeterminate_contacts(self)
         if conflict:
             raise SceneError(conflict)
+
+    @cached_property
+    def layout(self) -> Layout:
+        """The numbering of the scene's nodes and the arrays along it
+        (:class:`~contactqp.model.Layout`), made once per scene: a scene does not change."""
+        from contactqp.model.layout import Layout
+
+        return Layout(self)
 
     @property
     def unit(self) -> Units:

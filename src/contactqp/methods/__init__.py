@@ -16,7 +16,7 @@ from typing import Any
 
 from contactqp.errors import OptionError
 from contactqp.methods.augmented import DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, solve_augmented
-from contactqp.methods.lagrange import solve_lagrange
+from contactqp.methods.lagrange import ACTIVE_SETS, solve_lagrange
 from contactqp.methods.penalty import solve_penalty
 from contactqp.methods.qp import BACKENDS, solve_qp
 from contactqp.methods.qp.settings import ACCURACIES
@@ -65,7 +65,9 @@ class Method:
 
 
 METHODS: dict[str, Method] = {
-    "lagrange": Method("lagrange", solve_lagrange, {"max_iterations": ITERATIONS}, FORMULATIONS,
+    "lagrange": Method("lagrange", solve_lagrange,
+                       {"max_iterations": ITERATIONS,
+                        "active_set": _choice("active_set", ACTIVE_SETS)}, FORMULATIONS,
                        "the saddle-point system [[K, Cᵀ], [C, 0]], an active-set loop"),
     "penalty": Method("penalty", solve_penalty, {"penalty": PENALTY, "max_iterations": ITERATIONS},
                       ("full", "condensed"), "K + ε CᵀC, the penalty on the walls passed"),

@@ -1,7 +1,11 @@
 """Explicit Lagrange multipliers: the saddle-point system [[K, Cᵀ], [C, 0]] [D; λ] = [P; g].
 
-Unilateral contact is an active-set loop on the same system: walls whose node is past them are
-added, walls that pull (λ < 0) are released, until the set is stable.
+Unilateral contact is an active-set loop on the same system: walls that pull (λ < 0) are
+released and walls passed are added, until the set is stable. ``active_set`` chooses which
+passed walls are added: "passed" every one (the textbook loop: its steps grow with the mesh,
+as a contact patch is crossed a few nodes per step), "hull" (the default) the vertices of
+convex hulls, with each step solved by statics in O(n) (:mod:`contactqp.methods.hull`), where
+the contacts are walls alone on the full formulation; elsewhere "hull" is the textbook loop.
 """
 
 from __future__ import annotations
@@ -11,6 +15,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from contactqp import linalg
+from contactqp.methods import hull
 from contactqp.methods._active_set import DECISION_RTOL, active_set_loop, displacement_tolerance
 from contactqp.model import Condensed, Model, elongation_rows
 from contactqp.result import Solution
@@ -125,8 +130,11 @@ def _tie_loop(ties: list[tuple[int, int, int]], start: int, goal: int) -> list[i
     return path
 
 
+ACTIVE_SETS = ("hull", "passed")
+
+
 def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: int | None = None,
-                   formulation: str = "full") -> Solution:
+                   formulation: str = "full", active_set: str = "hull") -> Solution:
     """Lagrange multipliers; ``contact`` "equality" (every wall holds) or "inequality";
     ``formulation`` "full" (unknowns u) or "strain" (u and the element elongations e, tied by
     equality rows whose multipliers, the element forces, go to the Solution's info)."""
@@ -154,10 +162,16 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
         kept = active & (lam > -force_tol)
         return independent_rows(C, kept, np.flatnonzero(~active & (pen > disp_tol)), pen, lam)
 
+    start, info = None, _strain_info(element_force)
+    if active_set == "hull" and formulation == "full" and hull.applies(model, contact):
+        solution, start = hull.solve_hull(model, max_iterations=max_iterations)
+        if solution is not None:
+            return solution
+        info = {"active_set": "hull, then passed (the hull's set came back)"}
     u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="lagrange",
-                                         max_iterations=max_iterations)
+                                         max_iterations=max_iterations, start=start)
     return Solution(u, lam, solver="lagrange", iterations=iterations,
-                    info=_strain_info(element_force))
+                    info=info | _strain_info(element_force))
 
 
 def _strain_info(element_force: list[np.ndarray]) -> dict:

@@ -22,9 +22,11 @@ from contactqp.model.layout import (
     Layout,
     contact_forces_on_nodes,
     element_forces,
+    in_set,
     largest,
     link_forces,
     load_force_scale,
+    node_set,
     penetration,
     seen_stiffness,
 )
@@ -32,6 +34,6 @@ from contactqp.model.layout import (
 __all__ = [
     "CONDENSE_LIMIT", "Condensed", "ContactRows", "Layout", "Model", "build_model", "condense",
     "contact_forces_on_nodes", "determinate_chain_solve", "displacement_scale",
-    "element_forces", "elongation_rows", "largest", "link_forces", "load_force_scale",
-    "penetration", "seen_stiffness", "wall_stiffness", "without_circulation",
+    "element_forces", "elongation_rows", "in_set", "largest", "link_forces",
+    "load_force_scale", "node_set", "penetration", "seen_stiffness", "wall_stiffness", "without_circulation",
 ]

@@ -167,7 +167,7 @@ def displacement_scale(free_displacement: np.ndarray, g: np.ndarray, scene: Scen
 def build_model(scene: Scene | Layout) -> Model:
     """The model of a scene, O(n) in time and memory: K comes straight from the element
     stiffnesses in band form (the chain with its supports taken out)."""
-    layout = scene if isinstance(scene, Layout) else Layout(scene)
+    layout = scene if isinstance(scene, Layout) else scene.layout
     n = layout.n_nodes
     supports = np.sort(layout.support_nodes)
     free = np.delete(np.arange(n), supports)

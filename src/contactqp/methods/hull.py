@@ -1,0 +1,219 @@
+"""The active set of walls on a chain, by convex hulls: steps that do not grow with the mesh.
+
+For a scene whose contacts are walls alone (any number of bars, supports and walls, on either
+side of a node), the saddle-point system with a set of walls held is solved by statics in one
+O(n) pass: with w = u_free − u (u_free = K⁻¹P, the bar with no contact), w is 0 at the
+supports, equal to u_free − gap at a held wall, linear in the compliance φ = Σ L/(EA) between
+held nodes and flat beyond the last one towards a free end (no force passes it). A held
+wall's force is the kink of w there. The same equations as the textbook loop
+(:mod:`contactqp.methods.lagrange`), a different way to choose the active set:
+
+- a wall that pulls is released, as in the textbook loop;
+- in each stretch of free nodes (between two held nodes, or a held node and a free end) where
+  a node passes a wall, the walls added are the vertices of the greatest convex minorant of
+  that stretch's signed gaps against φ: the held set that makes the stretch feasible with
+  forces of the right sign at once, if its ends stay where they are. The minorant is an
+  isotonic regression of the slopes (scipy.optimize.isotonic_regression, O(n)); a free end
+  clips its slopes (no force beyond the last contact).
+
+The textbook loop adds every passed wall, so its active set crosses a contact patch a few
+nodes per step (steps grow with the mesh); the hull adds a patch's walls in one step. Measured
+in ``benchmarks/run.py --cases contacts``: 2 to 7 steps at every size from 10³ to 10⁶ walls
+on the benchmark's obstacles. A set that comes back or more than ``max_iterations`` steps
+hands over to the textbook loop from the set reached (reported in the Solution's info).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import isotonic_regression
+
+from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
+from contactqp.model import Model
+from contactqp.result import Solution
+
+
+def applies(model: object, contact: str) -> bool:
+    """The hull loop solves unilateral walls on the full formulation's chain (no bar
+    contacts: a bar contact couples two chains)."""
+    return (isinstance(model, Model) and contact == "inequality" and not model.scene.contacts
+            and model.n_contacts > 0)
+
+
+class WallsOnChain:
+    """The arrays of a walls-only scene along its global node numbering (module docstring)."""
+
+    def __init__(self, model: Model) -> None:
+        layout = model.layout
+        n = layout.n_nodes
+        self.model = model
+        offsets = layout.node_offsets
+        # φ strictly increasing over the whole chain: each bar after the last, one unit of
+        # its own compliance further on (the stretch between bars carries no node)
+        totals = np.array([b.compliance[-1] for b in layout.scene.bars])
+        shift = np.concatenate(([0.0], np.cumsum(2.0 * totals)))[:-1]
+        self.phi = layout.compliance + np.repeat(shift, np.diff(offsets))
+        self.bar = np.repeat(np.arange(offsets.size - 1), np.diff(offsets))
+        self.bar_start = np.zeros(n, dtype=bool)
+        self.bar_start[offsets[:-1]] = True
+        self.bar_end = np.zeros(n, dtype=bool)
+        self.bar_end[offsets[1:] - 1] = True
+        self.support = np.zeros(n, dtype=bool)
+        self.support[layout.support_nodes] = True
+        self.u_free = model.full_displacements(model.free_displacement)
+        rows = layout.rows
+        walls = len(layout.scene.walls)
+        node, sign, gap = rows.node[:walls], rows.coefficient[:walls], rows.gap[:walls]
+        self.bound, self.owner = {}, {}
+        for side, s in ((1, 1.0), (-1, -1.0)):
+            # the nearest wall on each side of a node holds it (ties: the first in scene order)
+            order = np.flatnonzero((sign == s) & ~self.support[node])
+            if np.bincount(node[order], minlength=n).max(initial=0) > 1:
+                order = order[np.lexsort((order, gap[order], node[order]))]
+                first = np.ones(order.size, dtype=bool)
+                first[1:] = node[order][1:] != node[order][:-1]
+                order = order[first]
+            bound = np.full(n, np.inf)
+            bound[node[order]] = gap[order]
+            owner = np.full(n, -1, dtype=np.intp)
+            owner[node[order]] = order
+            self.bound[side], self.owner[side] = bound, owner
+        # the bound on u: u <= hi (+ walls), -u <= lo_gap (- walls)
+        self.n = n
+        self.n_rows = model.n_contacts
+        P = layout.nodal_loads
+        self.force_tolerance_base = float(np.abs(P).max(initial=0.0))
+        stiffness = float(model.band[0].max()) if model.band.size else 1.0
+        self.displacement_floor = max(float(np.abs(model.g).max(initial=0.0)),
+                                      float(np.abs(P).max(initial=0.0)) / stiffness)
+
+    def statics(self, held: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray,
+                                                           np.ndarray]:
+        """u with the walls ``held`` (side -> mask) at their gaps; returns (u, held node
+        numbers in order, the force of each held node's wall (N, >= 0 when it pushes))."""
+        pinned = self.support | held[1] | held[-1]
+        nodes = np.flatnonzero(pinned)
+        target = np.where(held[1], self.bound[1], np.where(held[-1], -self.bound[-1], 0.0))
+        w_held = self.u_free[nodes] - target[nodes]
+        phi = self.phi
+        # per bar, w flat from the bar's start to its first held node and from its last held
+        # node to the bar's end: anchors at the bar's ends with those values
+        bar = self.bar[nodes]
+        first = np.r_[True, bar[1:] != bar[:-1]]
+        last = np.r_[bar[1:] != bar[:-1], True]
+        starts = np.flatnonzero(self.bar_start)[bar[first]]
+        ends = np.flatnonzero(self.bar_end)[bar[last]]
+        xp = np.concatenate((phi[starts], phi[nodes], phi[ends]))
+        fp = np.concatenate((w_held[first], w_held, w_held[last]))
+        order = np.argsort(xp, kind="stable")
+        w = np.interp(phi, xp[order], fp[order])
+        u = self.u_free - w
+        # slopes of w on each side of every held node (0 towards a free end)
+        slope = np.diff(w_held) / np.diff(phi[nodes]) if nodes.size > 1 else np.zeros(0)
+        left = np.r_[0.0, slope]
+        right = np.r_[slope, 0.0]
+        left[first] = 0.0
+        right[last] = 0.0
+        # a + wall pushes in -x: its force is the concave kink of w; a - wall the convex one
+        force = np.where(held[1][nodes], left - right, right - left)
+        return u, nodes, force
+
+    def add_hull_walls(self, side: int, u: np.ndarray, pinned: np.ndarray, passed: np.ndarray,
+                       tolerance: float) -> np.ndarray:
+        """The walls on ``side`` to add: the vertices of each passed stretch's greatest convex
+        minorant of its signed gaps (module docstring)."""
+        bound, has = self.bound[side], np.isfinite(self.bound[side])
+        signed_gap = bound - side * u  # < 0 where passed
+        run = np.cumsum(pinned | self.bar_start)  # a stretch per held node or bar start
+        adding = np.zeros(self.n, dtype=bool)
+        stretch_of = run[passed]
+        stretches = stretch_of[np.r_[True, stretch_of[1:] != stretch_of[:-1]]]
+        begin = np.searchsorted(run, stretches, side="left")
+        finish = np.searchsorted(run, stretches, side="right")
+        for a, b in zip(begin.tolist(), finish.tolist()):
+            # nodes a..b-1 share the stretch; a is held (the left anchor) or a bar's start
+            anchored_left = bool(pinned[a])
+            inner = a + 1 if anchored_left else a
+            anchored_right = b < self.n and not self.bar_start[b] and bool(pinned[b])
+            nodes = inner + np.flatnonzero(has[inner:b])
+            x, y = self.phi[nodes], signed_gap[nodes]
+            if anchored_left:
+                x, y = np.r_[self.phi[a], x], np.r_[0.0, y]
+            if anchored_right:
+                x, y = np.r_[x, self.phi[b]], np.r_[y, 0.0]
+            clip = 0 if anchored_left and anchored_right else (-1 if anchored_left else 1)
+            vertices = minorant_vertices(x, y, clip)
+            vertices -= int(anchored_left)
+            vertices = vertices[(vertices >= 0) & (vertices < nodes.size)]
+            chosen = nodes[vertices]
+            adding[chosen[signed_gap[chosen] < -tolerance]] = True
+        return adding
+
+
+def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
+    """Indices of the vertices of the greatest convex minorant of the points (x, y), x
+    increasing: the slopes' isotonic regression, weighted by the steps of x, changes value
+    there. ``clip`` −1: slopes <= 0 (a free end on the right: nothing pulls beyond the last
+    contact, so the minorant ends flat, its last vertex the lowest point); +1: slopes >= 0
+    (a free end on the left); 0: both ends held (the first and last points, at 0)."""
+    if x.size < 2:
+        return np.zeros(x.size, dtype=np.intp)
+    dx = np.diff(x)
+    slope = isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
+    if clip < 0:
+        slope = np.minimum(slope, 0.0)
+    elif clip > 0:
+        slope = np.maximum(slope, 0.0)
+    vertices = np.flatnonzero(slope[1:] != slope[:-1]) + 1
+    if clip > 0 and slope[0] > 0.0:  # the minorant rises from the first point: its lowest
+        vertices = np.r_[0, vertices]
+    if clip < 0 and slope[-1] < 0.0:  # the minorant falls to the last point: its lowest
+        vertices = np.r_[vertices, x.size - 1]
+    return vertices
+
+
+def solve_hull(model: Model, *, max_iterations: int | None = None
+               ) -> tuple[Solution | None, np.ndarray]:
+    """The hull loop (module docstring). Returns (the Solution, None-free) or, when the set
+    cycles or the steps run out, (None, the active rows reached) for the textbook loop to
+    finish from."""
+    chain = WallsOnChain(model)
+    held = {1: np.zeros(chain.n, dtype=bool), -1: np.zeros(chain.n, dtype=bool)}
+    limit = default_max_iterations(chain.n_rows) if max_iterations is None else max_iterations
+    seen: set[bytes] = set()
+    for step in range(1, limit + 1):
+        u, nodes, force = chain.statics(held)
+        scale = max(chain.force_tolerance_base, float(np.abs(force).max(initial=0.0)))
+        force_tol = DECISION_RTOL * scale
+        disp_tol = DECISION_RTOL * max(float(np.abs(u).max(initial=0.0)),
+                                       chain.displacement_floor)
+        pulling = nodes[force < -force_tol]
+        pinned = chain.support | held[1] | held[-1]
+        passed = {side: ~pinned & (chain.bound[side] - side * u < -disp_tol)
+                  for side in (1, -1)}
+        if not pulling.size and not passed[1].any() and not passed[-1].any():
+            return _solution(chain, u, nodes, force, held, step), np.zeros(0)
+        key = held[1].tobytes() + held[-1].tobytes()
+        if key in seen:
+            break
+        seen.add(key)
+        for side in (1, -1):
+            held[side][pulling] = False
+        for side in (1, -1):
+            if passed[side].any():
+                held[side] |= chain.add_hull_walls(side, u, pinned, passed[side], disp_tol)
+        held[-1] &= ~held[1]
+    active = np.zeros(chain.n_rows, dtype=bool)
+    for side in (1, -1):
+        active[chain.owner[side][held[side]]] = True
+    return None, active
+
+
+def _solution(chain: WallsOnChain, u: np.ndarray, nodes: np.ndarray, force: np.ndarray,
+              held: dict[int, np.ndarray], steps: int) -> Solution:
+    contact_force = np.zeros(chain.n_rows)
+    for side in (1, -1):
+        mine = held[side][nodes]
+        contact_force[chain.owner[side][nodes[mine]]] = force[mine]
+    return Solution(u[chain.model.free], contact_force, solver="lagrange", iterations=steps,
+                    info={"active_set": "hull"})
