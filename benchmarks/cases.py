@@ -57,6 +57,27 @@ def obstacle(elements: int) -> contactqp.Scene:
     return contactqp.wall_at_every_node(tapered_scene(elements).with_walls(()), gaps)
 
 
+def channel(contacts: int) -> contactqp.Scene:
+    """The tapered bar in a narrow wavy channel, a wall on both sides of every node
+    (``contacts`` walls, ``contacts``/2 elements): centre c(x) = 0.1 mm·sin(3πx/L) + 0.15 mm·x/L,
+    half-width 5 µm, so that most nodes touch one side or the other."""
+    elements = max(contacts // 2, 2)
+    x = np.linspace(0.0, 1.0, elements + 1)
+    centre, half = 1e-4 * np.sin(3.0 * np.pi * x) + 1.5e-4 * x, 5e-6
+    scene = contactqp.wall_at_every_node(tapered_scene(elements).with_walls(()), centre + half)
+    return contactqp.wall_at_every_node(scene, half - centre, "-")
+
+
+def flat_patch(contacts: int) -> contactqp.Scene:
+    """The tapered bar pressed onto a flat wall at every node, 10 µm away, by a uniform load
+    of 2 MN/m along it (no point load): 95 % of the nodes end in contact, one patch."""
+    bar = contactqp.Bar.tapered_circle(1.0, contacts, 0.040, 0.020, 210e9)
+    scene = contactqp.Scene(bar, (contactqp.Support(0),), (),
+                            distributed=(contactqp.DistributedLoad(2e6),),
+                            name=f"patch-{contacts}")
+    return contactqp.wall_at_every_node(scene, 1e-5)
+
+
 def default_with(gap: float | None = None, load_factor: float = 1.0) -> contactqp.Scene:
     """The default scene with another gap at the tip, or its load scaled."""
     scene = contactqp.default_scene()

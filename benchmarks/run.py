@@ -1,7 +1,7 @@
 """The benchmarks, one entry point: named groups of cases, each measured against a floor from
 the same run (one banded factor-and-solve of K) and, where it has one, an exact reference.
 
-    python benchmarks/run.py [--cases matrix,taper,walls,overhead,guarantee] [--quick]
+    python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,guarantee] [--quick]
                              [--out DIR] [--scenes N] [--seed S]
     python benchmarks/run.py --check DIR       # is a matrix output folder complete? (CI)
 
@@ -10,6 +10,8 @@ the same run (one banded factor-and-solve of K) and, where it has one, an exact 
                four charts (benchmarks/matrix.py). The default group; --quick: the small cases
     taper      the tapered bar from 10² to 10⁶ elements, one wall (benchmarks/groups.py)
     walls      a wall at every node, 10² to 10⁵ contacts (benchmarks/groups.py)
+    contacts   iterations and time against 10³ … 10⁶ contacts, every method, three obstacles
+               (one-sided, a two-sided channel, a flat patch) (benchmarks/contacts.py)
     overhead   what the QP method costs on top of a direct solver call (benchmarks/groups.py)
     guarantee  does verified mean right? every method on --scenes random scenes against the
                exact reference (benchmarks/guarantee.py)
@@ -24,11 +26,12 @@ import argparse
 import sys
 from pathlib import Path
 
+import contacts
 import groups
 import guarantee
 import matrix
 
-CASES = ("matrix", "taper", "walls", "overhead", "guarantee")
+CASES = ("matrix", "taper", "walls", "contacts", "overhead", "guarantee")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -57,6 +60,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"== {name}", flush=True)
         if name == "matrix":
             matrix.main(args.quick, out / "matrix")
+        elif name == "contacts":
+            contacts.main(args.quick, out / "contacts")
         elif name == "guarantee":
             scenes = min(args.scenes, 100) if args.quick else args.scenes
             status |= guarantee.main(scenes, args.seed, out / "guarantee")

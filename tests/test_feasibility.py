@@ -73,3 +73,14 @@ def test_equality_through_a_bar_contact_that_fixes_a_node_twice_is_refused():
     with pytest.raises(contactqp.OptionError) as error:
         contactqp.solve(scene, contact="equality")
     assert all(name in str(error.value) for name in ("wall[0]", "wall[1]", "contact[0]"))
+
+
+def test_two_bar_contacts_from_supported_ends_to_one_node_are_refused():
+    """Random scene (seed 8): bar 1's node 0 held at u >= 0 by two bar contacts whose other
+    ends are supports, and at u <= 0 by a wall. Each contact alone clamps the node with the
+    wall (a one-way loop); together they split the wall's force any way, and a method and the
+    exact reference disagreed about it, both verified."""
+    with pytest.raises(contactqp.SceneError, match="not determined"):
+        Scene((BAR, BAR, BAR), (Support(0, 0), Support(2, 1), Support(0, 2)), (),
+              (Wall(0, 0.0, "+", 1),),
+              contacts=(BarContact(2, 0, 1, 0, 0.0), BarContact(0, 0, 1, 0, 0.0)))

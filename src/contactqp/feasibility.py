@@ -112,9 +112,13 @@ def indeterminate_contacts(scene: Scene) -> str:
     already in one tree closes a loop, which adds up when the tie's gap equals the difference
     the tree's path gives (loops of zero gaps are always found; a loop whose nonzero gaps add
     up is found when the forest holds the rest of it)."""
+    all_edges = constraint_graph(scene)
+    parallel = _parallel(all_edges)
+    if parallel:
+        return parallel
     if not scene.contacts:
         return ""
-    edges = _contact_subgraph(scene, constraint_graph(scene))
+    edges = _contact_subgraph(scene, all_edges)
     tree: dict[int, list[tuple[int, float, int, str]]] = {}  # node -> (next, x_next − x, edge)
     parent: dict[int, int] = {}
 
@@ -142,6 +146,23 @@ def indeterminate_contacts(scene: Scene) -> str:
         return (f"{names} hold their nodes at one position in more than one way, with no gap "
                 "to spare: the contact forces along that loop are not determined by rigid "
                 "contact (give one of them a gap, or hold the node by a support)")
+    return ""
+
+
+def _parallel(edges: list) -> str:
+    """Two rows that hold the same node (or pair of nodes) from the same side at the same gap:
+    a loop of two rows facing both ways, which the spanning forest misses when each closes a
+    one-way loop with a third row (two bar contacts from supported ends, and a wall on the
+    other side of their node: random scene, seed 8). Their forces split arbitrarily."""
+    seen: dict[tuple[int, int], tuple[float, str]] = {}
+    scale = max((abs(edge[2]) for edge in edges), default=0.0)
+    for start, end, gap, _, text in edges:
+        other = seen.get((start, end))
+        if other is not None and abs(other[0] - gap) <= 1e-12 * scale:
+            return (f"{other[1]} and {text} hold the same node from the same side at the same "
+                    "gap: how their force splits is not determined (keep one of them)")
+        if other is None or gap < other[0]:
+            seen[(start, end)] = (gap, text)
     return ""
 
 

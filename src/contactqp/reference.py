@@ -44,16 +44,20 @@ class Reference:
     precision: float
 
 
-def reference(scene: Scene, max_steps: int | None = None) -> Reference:
+def reference(scene: Scene, max_steps: int | None = None,
+              start: np.ndarray | None = None) -> Reference:
     """The exact unilateral contact solution of ``scene`` (module docstring): statics in
     extended precision for one bar with walls only, exact rational arithmetic otherwise.
 
-    ``max_steps`` (default 2·rows + 10) bounds each active-set loop. Raises SceneError when
+    ``max_steps`` (default 2·rows + 10) bounds each active-set loop. ``start`` (statics path
+    only): the rows active at the first step, e.g. those a method found pushing; the answer
+    is certified by the same test whatever the start, so a start saves steps (a large contact
+    patch takes the loop thousands) without making the reference depend on the method. Raises SceneError when
     no certified answer is reached within them (and, on the rational path, its fallbacks),
     and for a scene beyond the rational path's reach (more than ``MAX_EXACT_NODES`` nodes).
     """
     if len(scene.bars) == 1 and not scene.contacts:
-        return statics_reference(scene, max_steps)
+        return statics_reference(scene, max_steps, start)
     from contactqp.reference_exact import rational_reference
 
     return rational_reference(scene, max_steps)
@@ -99,9 +103,10 @@ def _solve(k: np.ndarray, P: np.ndarray, fixed: np.ndarray, values: np.ndarray
     return u, N
 
 
-def statics_reference(scene: Scene, max_steps: int | None = None) -> Reference:
+def statics_reference(scene: Scene, max_steps: int | None = None,
+                      start: np.ndarray | None = None) -> Reference:
     """The solution of a one-bar scene with walls only, by statics in extended precision
-    (module docstring); ``max_steps`` as for :func:`reference`."""
+    (module docstring); ``max_steps`` and ``start`` as for :func:`reference`."""
     if len(scene.bars) != 1 or scene.contacts:
         raise SceneError(f"scene {scene.name!r}: the statics reference solves one bar with walls "
                          f"only; it has {len(scene.bars)} bars and {len(scene.contacts)} bar "
@@ -114,7 +119,7 @@ def statics_reference(scene: Scene, max_steps: int | None = None) -> Reference:
     _, nodes, signs, gaps = layout.rows
     nodes, signs, gaps_real = nodes.astype(np.intp), signs.astype(real), gaps.astype(real)
     force_scale = max(float(np.abs(P).max(initial=0.0)), 1e-300)
-    active = np.zeros(nodes.size, dtype=bool)
+    active = np.zeros(nodes.size, dtype=bool) if start is None else np.array(start, dtype=bool)
     max_steps = 2 * nodes.size + 10 if max_steps is None else max_steps
     for step in range(1, max_steps + 1):
         fixed = np.r_[supports, nodes[active]]

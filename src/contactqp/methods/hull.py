@@ -61,24 +61,20 @@ class WallsOnChain:
         self.support = np.zeros(n, dtype=bool)
         self.support[layout.support_nodes] = True
         self.u_free = model.full_displacements(model.free_displacement)
+        with np.errstate(divide="ignore"):  # 1/k per link, inf across a junction; one past
+            self.link_compliance = np.r_[1.0 / layout.link_stiffness, 0.0]
         rows = layout.rows
         walls = len(layout.scene.walls)
         node, sign, gap = rows.node[:walls], rows.coefficient[:walls], rows.gap[:walls]
-        self.bound, self.owner = {}, {}
+        self.bound, self.owner = {}, {}  # per side: the wall's gap, its row, at each node
         for side, s in ((1, 1.0), (-1, -1.0)):
-            # the nearest wall on each side of a node holds it (ties: the first in scene order)
+            # a scene has at most one wall per node and side (contactqp.scene refuses more)
             order = np.flatnonzero((sign == s) & ~self.support[node])
-            if np.bincount(node[order], minlength=n).max(initial=0) > 1:
-                order = order[np.lexsort((order, gap[order], node[order]))]
-                first = np.ones(order.size, dtype=bool)
-                first[1:] = node[order][1:] != node[order][:-1]
-                order = order[first]
             bound = np.full(n, np.inf)
             bound[node[order]] = gap[order]
             owner = np.full(n, -1, dtype=np.intp)
             owner[node[order]] = order
             self.bound[side], self.owner[side] = bound, owner
-        # the bound on u: u <= hi (+ walls), -u <= lo_gap (- walls)
         self.n = n
         self.n_rows = model.n_contacts
         P = layout.nodal_loads
@@ -109,7 +105,12 @@ class WallsOnChain:
         w = np.interp(phi, xp[order], fp[order])
         u = self.u_free - w
         # slopes of w on each side of every held node (0 towards a free end)
-        slope = np.diff(w_held) / np.diff(phi[nodes]) if nodes.size > 1 else np.zeros(0)
+        # the compliance between held neighbours summed element by element, not as a
+        # difference of φ: a stiff element after soft ones is 1e-5 of φ, and its force would
+        # lose five digits (measured: 1.8 N of 1.76e10 N, 3.5e-6 of F, on a random scene)
+        between = np.add.reduceat(self.link_compliance, nodes)[:-1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slope = np.diff(w_held) / between
         left = np.r_[0.0, slope]
         right = np.r_[slope, 0.0]
         left[first] = 0.0
