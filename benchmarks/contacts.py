@@ -75,8 +75,8 @@ def main(quick: bool, out: Path) -> None:
                         stopped[run] = f"failed at {n}"
                         continue
                     once = result.time
-                    seconds = (median_time(lambda m=method, o=options: contactqp.solve(
-                        scene, m, **o), 3) if once < 1.0 else once)
+                    seconds = (median_time(lambda s=scene, m=method, o=options: contactqp.solve(
+                        s, m, **o), 3) if once < 1.0 else once)
                 if exact is None:
                     exact = reference(scene, start=result.contact_force > 0.0)
                 scale = float(np.abs(exact.contact_force).max())
