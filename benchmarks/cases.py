@@ -20,6 +20,7 @@ import scipy.linalg as sla
 
 import contactqp
 from contactqp import Load, Wall
+from contactqp.builders import channel, flat_patch, obstacle  # noqa: F401 (the groups' scenes)
 from contactqp.model import build_model
 
 
@@ -47,35 +48,6 @@ def tapered_scene(elements: int, area_rule: str = "exact") -> contactqp.Scene:
     return contactqp.Scene(bar, (contactqp.Support(0),),
                            (contactqp.Load(elements // 2, 565486.67),),
                            (contactqp.Wall(elements, 1e-4, "+"),), name=f"taper-{elements}")
-
-
-def obstacle(elements: int) -> contactqp.Scene:
-    """The tapered bar beside an obstacle: a wall at every node, gaps
-    g(x) = 0.2 mm·(x/L)² + 10 µm·|sin(37 x/L)| (patches that depend on the mesh)."""
-    x = np.linspace(0.0, 1.0, elements + 1)
-    gaps = 2e-4 * x**2 + 1e-5 * np.abs(np.sin(37.0 * x))
-    return contactqp.wall_at_every_node(tapered_scene(elements).with_walls(()), gaps)
-
-
-def channel(contacts: int) -> contactqp.Scene:
-    """The tapered bar in a narrow wavy channel, a wall on both sides of every node
-    (``contacts`` walls, ``contacts``/2 elements): centre c(x) = 0.1 mm·sin(3πx/L) + 0.15 mm·x/L,
-    half-width 5 µm, so that most nodes touch one side or the other."""
-    elements = max(contacts // 2, 2)
-    x = np.linspace(0.0, 1.0, elements + 1)
-    centre, half = 1e-4 * np.sin(3.0 * np.pi * x) + 1.5e-4 * x, 5e-6
-    scene = contactqp.wall_at_every_node(tapered_scene(elements).with_walls(()), centre + half)
-    return contactqp.wall_at_every_node(scene, half - centre, "-")
-
-
-def flat_patch(contacts: int) -> contactqp.Scene:
-    """The tapered bar pressed onto a flat wall at every node, 10 µm away, by a uniform load
-    of 2 MN/m along it (no point load): 95 % of the nodes end in contact, one patch."""
-    bar = contactqp.Bar.tapered_circle(1.0, contacts, 0.040, 0.020, 210e9)
-    scene = contactqp.Scene(bar, (contactqp.Support(0),), (),
-                            distributed=(contactqp.DistributedLoad(2e6),),
-                            name=f"patch-{contacts}")
-    return contactqp.wall_at_every_node(scene, 1e-5)
 
 
 def default_with(gap: float | None = None, load_factor: float = 1.0) -> contactqp.Scene:

@@ -5,7 +5,15 @@ the architecture. Importing contactqp loads no QP solver and no matplotlib: a ba
 imported when it is first used, matplotlib when a chart is drawn.
 """
 
-from contactqp.builders import convert_units, default_scene, minimal, wall_at_every_node
+from contactqp.builders import (
+    channel,
+    convert_units,
+    default_scene,
+    flat_patch,
+    minimal,
+    obstacle,
+    wall_at_every_node,
+)
 from contactqp.check import GUARANTEE, TOLERANCES, Tolerances, check
 from contactqp.curve import LoadPath, first_contact_factor, load_path
 from contactqp.errors import (
@@ -40,7 +48,8 @@ __all__ = [
     "BarContact", "ContactqpError", "DistributedLoad", "Layout", "Load", "LoadPath", "Model",
     "OptionError", "QPProblem", "Result", "Scene", "SceneError", "SolverError",
     "SolverNotAvailable", "Support", "Tolerances", "Units", "Wall", "__version__",
-    "available_qp_solvers", "build_model", "check", "convert_units", "default_scene",
-    "first_contact_factor", "load_path", "load_scene", "minimal", "qp_problem",
+    "available_qp_solvers", "build_model", "channel", "check", "convert_units",
+    "default_scene", "first_contact_factor", "flat_patch", "load_path", "load_scene", "minimal",
+    "obstacle", "qp_problem",
     "scene_from_dict", "scene_to_toml", "solve", "wall_at_every_node",
 ]

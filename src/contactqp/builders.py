@@ -14,6 +14,7 @@ from contactqp.scene import (
     WALL_SIDES,
     AreaRule,
     Bar,
+    DistributedLoad,
     Load,
     Scene,
     Support,
@@ -58,6 +59,45 @@ def default_scene(elements: int = DEFAULT_ELEMENTS, area_rule: AreaRule = "midpo
         walls=(Wall(elements, DEFAULT_GAP, "+"),),
         name=name,
     )
+
+
+def obstacle(elements: int) -> Scene:
+    """The default scene's bar (``elements`` exact-area elements, its load at mid-length)
+    beside an obstacle: a + wall at every node, gaps g(x) = 0.2 mm·(x/L)² + 10 µm·|sin 37x/L|.
+    The discrete obstacle problem: a few contact patches, whose nodes depend on the mesh."""
+    elements = whole_number("elements", elements, 2)
+    x = np.linspace(0.0, 1.0, elements + 1)
+    gaps = 2e-4 * x**2 + 1e-5 * np.abs(np.sin(37.0 * x))
+    return replace(wall_at_every_node(_tapered(elements, point_load=True), gaps),
+                   name=f"obstacle ({elements} walls)")
+
+
+def channel(contacts: int) -> Scene:
+    """The default scene's bar in a narrow wavy channel: a wall on both sides of every node
+    (``contacts`` walls, ``contacts``/2 elements), centre c(x) = 0.1 mm·sin(3πx/L) +
+    0.15 mm·x/L, half-width 5 µm; most nodes end touching one side or the other."""
+    elements = max(whole_number("contacts", contacts, 4) // 2, 2)
+    x = np.linspace(0.0, 1.0, elements + 1)
+    centre, half = 1e-4 * np.sin(3.0 * np.pi * x) + 1.5e-4 * x, 5e-6
+    scene = wall_at_every_node(_tapered(elements, point_load=True), centre + half)
+    return replace(wall_at_every_node(scene, half - centre, "-"),
+                   name=f"channel ({2 * elements} walls)")
+
+
+def flat_patch(contacts: int) -> Scene:
+    """The default scene's bar (``contacts`` elements) pressed onto a flat wall 10 µm from
+    every node by a uniform load of 2 MN/m (no point load): 95 % of the nodes end in contact,
+    in one patch."""
+    scene = _tapered(whole_number("contacts", contacts, 2), point_load=False)
+    scene = replace(scene, distributed=(DistributedLoad(2e6),), name=f"flat patch ({contacts} walls)")
+    return wall_at_every_node(scene, 1e-5)
+
+
+def _tapered(elements: int, point_load: bool) -> Scene:
+    bar = Bar.tapered_circle(DEFAULT_LENGTH, elements, *DEFAULT_DIAMETERS, DEFAULT_MODULUS,
+                             area_rule="exact", yield_stress=DEFAULT_YIELD)
+    loads = (Load(elements // 2, DEFAULT_LOAD),) if point_load else ()
+    return Scene(bar, (Support(0),), loads)
 
 
 def needed_nodes(scene: Scene, bar: int = 0) -> np.ndarray:
@@ -171,4 +211,5 @@ def wall_at_every_node(scene: Scene, gap: Any, side: WallSide = "+", bar: int = 
 
 __all__ = ["DEFAULT_DIAMETERS", "DEFAULT_ELEMENTS", "DEFAULT_GAP", "DEFAULT_LENGTH",
            "DEFAULT_LOAD", "DEFAULT_LOAD_NODE", "DEFAULT_MODULUS", "DEFAULT_YIELD",
-           "convert_units", "default_scene", "minimal", "needed_nodes", "wall_at_every_node"]
+           "channel", "convert_units", "default_scene", "flat_patch", "minimal", "needed_nodes",
+           "obstacle", "wall_at_every_node"]

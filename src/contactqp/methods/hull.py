@@ -188,7 +188,7 @@ def solve_hull(model: Model, *, max_iterations: int | None = None
         force_tol = DECISION_RTOL * scale
         disp_tol = DECISION_RTOL * max(float(np.abs(u).max(initial=0.0)),
                                        chain.displacement_floor)
-        pulling = nodes[force < -force_tol]
+        pulling = nodes[(force < -force_tol) & ~chain.support[nodes]]  # a support may pull
         pinned = chain.support | held[1] | held[-1]
         passed = {side: ~pinned & (chain.bound[side] - side * u < -disp_tol)
                   for side in (1, -1)}

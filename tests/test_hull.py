@@ -1,0 +1,197 @@
+"""The hull active set (contactqp.methods.hull) inside lagrange: right on random obstacles
+against the exact reference, the same answer as the textbook loop, and a step count that does
+not grow with the mesh."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import contactqp
+from contactqp import Bar, DistributedLoad, Load, Scene, SceneError, Support, Wall
+from contactqp.methods.hull import minorant_vertices
+from contactqp.random_scenes import random_scene
+from contactqp.reference import reference
+
+GOAL = 1e-8  # the issue's accuracy goal: forces within 1e-8 of the largest
+
+
+# --- the minorant against a brute force in exact integer arithmetic: a point is a vertex of
+# the greatest convex minorant when no chord between two other points passes through or below it
+def brute_vertices(x: list[int], y: list[int], clip: int) -> set[int]:
+    xs, ys = list(x), list(y)
+    far = 10**9 * (x[-1] - x[0] + 1)
+    if clip < 0:  # a free end on the right: a far point level with the lowest
+        xs.append(x[-1] + far)
+        ys.append(min(y))
+    if clip > 0:
+        xs.insert(0, x[0] - far)
+        ys.insert(0, min(y))
+    shift = 1 if clip > 0 else 0
+    vertices = set()
+    for i in range(len(x)):
+        j = i + shift
+        covered = any(
+            (ys[j] - ys[a]) * (xs[b] - xs[a]) >= (ys[b] - ys[a]) * (xs[j] - xs[a])
+            for a, b in itertools.combinations(range(len(xs)), 2)
+            if a != j and b != j and xs[a] < xs[j] < xs[b])
+        if not covered:
+            vertices.add(i)
+    return vertices
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.tuples(st.integers(1, 4), st.integers(-20, 20)), min_size=3, max_size=12),
+       st.sampled_from([-1, 0, 1]))
+def test_minorant_vertices_are_the_convex_hull(points, clip):
+    x = list(itertools.accumulate(step for step, _ in points))
+    y = [value for _, value in points]
+    if clip <= 0:
+        y[0] = 0  # a held left end
+    if clip >= 0:
+        y[-1] = 0  # a held right end
+    found = set(minorant_vertices(np.array(x, float), np.array(y, float), clip).tolist())
+    expected = brute_vertices(x, y, clip)
+    for end, held in ((0, clip <= 0), (len(y) - 1, clip >= 0)):
+        if held:  # a held end is no wall to add (the caller drops it)
+            found.discard(end)
+            expected.discard(end)
+    assert found == expected
+
+
+# --- random obstacles, one bar: every kind the issue names, against the exact reference
+@st.composite
+def obstacle_scenes(draw):
+    n = draw(st.integers(4, 60))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    stiffness = 10.0 ** rng.uniform(5.0, 5.0 + draw(st.sampled_from([0.0, 2.0, 5.0])), n)
+    bar = Bar.from_areas(stiffness / 2e11, 2e11, lengths=np.ones(n))
+    supports = {0} if rng.random() < 0.6 else {int(rng.integers(0, n + 1))}
+    if rng.random() < 0.3:
+        supports.add(int(rng.integers(0, n + 1)))
+    free = [i for i in range(n + 1) if i not in supports]
+    loads = tuple(Load(int(rng.choice(free)), float(rng.choice([-1, 1]) * 10 ** rng.uniform(3, 6)))
+                  for _ in range(int(rng.integers(0, 3))))
+    distributed = ((DistributedLoad(float(rng.choice([-1, 1]) * 10 ** rng.uniform(3, 6))),)
+                   if rng.random() < 0.4 or not loads else ())
+    scene = Scene(bar, tuple(Support(i) for i in sorted(supports)), loads,
+                  distributed=distributed)
+    u_free = contactqp.solve(scene).u
+    scale = max(np.abs(u_free).max(), 1e-12)
+    x = np.linspace(0.0, 1.0, n + 1)
+    kind = draw(st.sampled_from(["one-sided", "channel", "flat", "touching"]))
+    shape = scale * (rng.uniform(-0.5, 0.5) * x**2 + rng.uniform(0, 0.3) * np.abs(
+        np.sin(rng.uniform(5, 40) * x)))
+    walls = []
+    for i in free:
+        if kind == "touching":  # every node exactly on a wall where the loads leave it
+            side = "+" if u_free[i] >= 0 else "-"
+            walls.append(Wall(i, abs(u_free[i]) * float(rng.choice([0.5, 1.0, 1.0])), side))
+        elif kind == "flat":
+            walls.append(Wall(i, 0.2 * scale, "+" if rng.random() < 0.5 else "+"))
+        else:
+            walls.append(Wall(i, float(shape[i] + 0.1 * scale), "+"))
+            if kind == "channel":
+                walls.append(Wall(i, float(0.1 * scale - shape[i] + 0.02 * scale), "-"))
+    return Scene(bar, scene.supports, loads, tuple(walls), distributed=distributed)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck))
+@given(obstacle_scenes())
+def test_random_obstacles_match_the_exact_reference(scene):
+    exact = reference(scene)
+    result = contactqp.solve(scene, "lagrange")
+    assert result.info.get("active_set") == "hull"
+    largest = max(np.abs(exact.contact_force).max(), 1e-300)
+    # the goal, plus round-off of the scene's force scale (a touching wall's exact force is
+    # 0, and both answers carry ~1e-13 F there)
+    assert np.abs(result.contact_force - exact.contact_force).max() <= (
+        GOAL * largest + 1e-12 * result.force_scale)
+    assert np.abs(result.u - exact.displacement).max() <= 1e-9 * result.displacement_scale
+    assert result.verified, result.message
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_several_bars_with_walls_match_the_textbook_loop_and_the_reference(seed):
+    rng = np.random.default_rng(seed)
+    try:
+        scene = random_scene(rng, contacts=False)
+    except SceneError:
+        pytest.skip("no valid scene drawn")
+    hull = contactqp.solve(scene, "lagrange")
+    passed = contactqp.solve(scene, "lagrange", active_set="passed")
+    exact = reference(scene)
+    for result in (hull, passed):
+        assert np.abs(result.contact_force - exact.contact_force).max(initial=0.0) <= (
+            result.force_error_bound + 1e-12 * result.force_scale)
+    assert np.abs(hull.contact_force - passed.contact_force).max(initial=0.0) <= (
+        hull.force_error_bound + passed.force_error_bound + 1e-12 * hull.force_scale)
+
+
+# --- the step count on refinement sequences: flat, not growing with the mesh
+@pytest.mark.parametrize("build", [contactqp.obstacle, contactqp.channel, contactqp.flat_patch])
+def test_steps_do_not_grow_with_the_mesh(build):
+    """10³, 10⁴, 10⁵ contacts: the textbook loop needs 6 → 151 steps on the obstacle and
+    44 → 4 239 on the flat patch (issue 14); the hull at most a step more per tenfold and
+    never more than 8 (measured: 2, 6–7, 2)."""
+    steps = []
+    for n in (10**3, 10**4, 10**5):
+        result = contactqp.solve(build(n), "lagrange")
+        assert result.verified
+        assert result.info.get("active_set") == "hull"
+        steps.append(result.iterations)
+    assert max(steps) <= 8
+    assert all(b <= a + 1 for a, b in itertools.pairwise(steps))
+
+
+def test_the_textbook_loop_needs_more_steps_on_a_patch():
+    """What the hull saves, on the same scene: the textbook loop adds every passed wall, and
+    its set crosses the patch a few nodes per step."""
+    scene = contactqp.flat_patch(1000)
+    hull, passed = (contactqp.solve(scene, "lagrange", active_set=a) for a in ("hull", "passed"))
+    assert passed.iterations >= 10 * hull.iterations
+    assert np.abs(hull.contact_force - passed.contact_force).max(initial=0.0) <= (
+        hull.force_error_bound + passed.force_error_bound)
+
+
+def test_a_patch_against_statics():
+    """A uniform load q on a uniform bar fixed at node 0, a flat + wall g from every node. If
+    nodes c..n touch (u = g) and 1..c−1 do not, statics gives everything: elements before c
+    carry N_e = N_0 − S_e (S_e the nodal loads on nodes 1..e), compatibility
+    Σ_(e<c) N_e / k = g fixes N_0, node c's wall takes p_c − N_(c−1) and every later wall its
+    own nodal load p_j. The answer is the c for which the free nodes stay off their walls and
+    every wall pushes; computed here, not by the library."""
+    n, q, E, A, L = 40, 1e5, 2e11, 1e-4, 1.0
+    h = L / n
+    k = E * A / h
+    bar = Bar.from_areas(np.full(n, A), E, lengths=np.full(n, h))
+    g = 0.6 * q * L**2 / (2 * E * A)  # 0.6 of the free tip's displacement
+    scene = contactqp.wall_at_every_node(
+        Scene(bar, (Support(0),), (), distributed=(DistributedLoad(q),)), g)
+    p = np.full(n + 1, q * h)
+    p[-1] = q * h / 2
+    answers = []
+    for c in range(1, n + 1):
+        S = np.concatenate(([0.0], np.cumsum(p[1:c])))  # S_e for e = 0..c-1
+        N0 = (g * k + S.sum()) / c
+        N = N0 - S
+        u = np.concatenate(([0.0], np.cumsum(N / k)))  # u_0..u_c
+        forces = p.copy()
+        forces[:c] = 0.0
+        forces[c] = p[c] - N[-1]
+        if (u[1:c] <= g).all() and (forces >= 0.0).all():
+            answers.append(forces[1:])
+    assert len(answers) == 1  # one c fits: the exact answer is unique
+    result = contactqp.solve(scene, "lagrange")
+    assert result.info.get("active_set") == "hull"
+    assert np.abs(result.contact_force - answers[0]).max() <= 1e-9 * q * L
+    assert result.verified
+
+
+def test_the_option_is_checked():
+    with pytest.raises(contactqp.OptionError, match="active_set"):
+        contactqp.solve(contactqp.default_scene(), "lagrange", active_set="greedy")
