@@ -92,7 +92,7 @@ def obstacle_scenes(draw):
             side = "+" if u_free[i] >= 0 else "-"
             walls.append(Wall(i, abs(u_free[i]) * float(rng.choice([0.5, 1.0, 1.0])), side))
         elif kind == "flat":
-            walls.append(Wall(i, 0.2 * scale, "+" if rng.random() < 0.5 else "+"))
+            walls.append(Wall(i, 0.2 * scale, "+" if u_free[i] >= 0 else "-"))  # where it goes
         else:
             walls.append(Wall(i, float(shape[i] + 0.1 * scale), "+"))
             if kind == "channel":
