@@ -104,7 +104,7 @@ def obstacle_scenes(draw):
 @given(obstacle_scenes())
 def test_random_obstacles_match_the_exact_reference(scene):
     exact = reference(scene)
-    result = contactqp.solve(scene, "lagrange")
+    result = contactqp.solve(scene, "lagrange", formulation="full")
     assert result.info.get("active_set") == "hull"
     largest = max(np.abs(exact.contact_force).max(), 1e-300)
     # the goal, plus round-off of the scene's force scale (a touching wall's exact force is
@@ -122,8 +122,8 @@ def test_several_bars_with_walls_match_the_textbook_loop_and_the_reference(seed)
         scene = random_scene(rng, contacts=False)
     except SceneError:
         pytest.skip("no valid scene drawn")
-    hull = contactqp.solve(scene, "lagrange")
-    passed = contactqp.solve(scene, "lagrange", active_set="passed")
+    hull = contactqp.solve(scene, "lagrange", formulation="full")
+    passed = contactqp.solve(scene, "lagrange", formulation="full", active_set="passed")
     exact = reference(scene)
     for result in (hull, passed):
         assert np.abs(result.contact_force - exact.contact_force).max(initial=0.0) <= (
@@ -152,7 +152,8 @@ def test_the_textbook_loop_needs_more_steps_on_a_patch():
     """What the hull saves, on the same scene: the textbook loop adds every passed wall, and
     its set crosses the patch a few nodes per step."""
     scene = contactqp.flat_patch(1000)
-    hull, passed = (contactqp.solve(scene, "lagrange", active_set=a) for a in ("hull", "passed"))
+    hull, passed = (contactqp.solve(scene, "lagrange", formulation="full", active_set=a)
+                    for a in ("hull", "passed"))
     assert passed.iterations >= 10 * hull.iterations
     assert np.abs(hull.contact_force - passed.contact_force).max(initial=0.0) <= (
         hull.force_error_bound + passed.force_error_bound)
@@ -186,7 +187,7 @@ def test_a_patch_against_statics():
         if (u[1:c] <= g).all() and (forces >= 0.0).all():
             answers.append(forces[1:])
     assert len(answers) == 1  # one c fits: the exact answer is unique
-    result = contactqp.solve(scene, "lagrange")
+    result = contactqp.solve(scene, "lagrange", formulation="full")
     assert result.info.get("active_set") == "hull"
     assert np.abs(result.contact_force - answers[0]).max() <= 1e-9 * q * L
     assert result.verified
@@ -195,3 +196,17 @@ def test_a_patch_against_statics():
 def test_the_option_is_checked():
     with pytest.raises(contactqp.OptionError, match="active_set"):
         contactqp.solve(contactqp.default_scene(), "lagrange", active_set="greedy")
+
+
+def test_auto_condenses_few_contacts_and_keeps_many_on_the_chain():
+    """formulation="auto": the default scene (one contact node) condensed, a wall at every node
+    of 1000 on the full chain (the hull); the same answer as either formulation named."""
+    few = contactqp.solve(contactqp.default_scene())
+    assert few.options.get("formulation") == "condensed"
+    full = contactqp.solve(contactqp.default_scene(), formulation="full")
+    assert abs(few.contact_force[0] - full.contact_force[0]) <= (
+        few.force_error_bound + full.force_error_bound)
+    many = contactqp.solve(contactqp.obstacle(1000))
+    assert "formulation" not in many.options and many.info.get("active_set") == "hull"
+    assert contactqp.solve(contactqp.default_scene(), "qp",
+                           formulation="auto").options.get("formulation") == "condensed"

@@ -226,7 +226,7 @@ def test_check_catches_a_false_success(backend, solver, make_scene, residual):
     if row is None or not row.available:
         pytest.skip(f"{backend}/{solver} is not installed")
     result = contactqp.solve(make_scene(), method="qp", backend=backend, solver=solver,
-                             scale=False)
+                             formulation="full", scale=False)
     assert result.claimed_success
     assert not result.verified
     assert f"{residual} residual" in result.message
@@ -380,7 +380,8 @@ def test_dense_solvers_are_not_attempted_on_a_long_bar(monkeypatch):
     row = next((r for r in QP_SOLVERS if (r.backend, r.solver) == ("qpsolvers", "quadprog")), None)
     if row is None or not row.available:
         pytest.skip("quadprog is not installed")
-    result = contactqp.solve(method="qp", backend="qpsolvers", solver="quadprog")
+    result = contactqp.solve(method="qp", backend="qpsolvers", solver="quadprog",
+                             formulation="full")
     assert not result.claimed_success and not result.verified
     assert result.status.startswith("not attempted")
 

@@ -255,7 +255,7 @@ def parser() -> argparse.ArgumentParser:
         "a wall pulls (the reason on stderr), 2 for bad input")
     solve_parser.add_argument("--method", default="lagrange", choices=list(METHODS))
     solve_parser.add_argument("--contact", default="inequality", choices=CONTACT_KINDS)
-    solve_parser.add_argument("--formulation", default="full", choices=FORMULATIONS,
+    solve_parser.add_argument("--formulation", default="auto", choices=("auto", *FORMULATIONS),
                               help="full, condensed (contact nodes only) or strain (lagrange, qp)")
     solve_parser.add_argument("--penalty", type=float,
                               help="penalty ε (force per length in the scene's units; default "

@@ -34,8 +34,11 @@ def as_scene(scene: Scene | str | os.PathLike | None) -> Scene:
     return scene
 
 
+AUTO_CONDENSE = 16  # formulation="auto" condenses a scene with at most this many contact nodes
+
+
 def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrange",
-          contact: str = "inequality", formulation: str = "full", **options: Any) -> Result:
+          contact: str = "inequality", formulation: str = "auto", **options: Any) -> Result:
     """Solve a scene by ``method`` with ``contact`` "inequality" (unilateral, the default) or
     "equality" (the textbook form), and return a checked :class:`~contactqp.result.Result`.
 
@@ -50,7 +53,9 @@ def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrang
     default; accuracy "default" or "high"; scale, default True; verbose, default False: see
     :mod:`contactqp.methods.qp`).
 
-    ``formulation``: "full" (every free node an unknown), "condensed" (K factored once, the
+    ``formulation``: "auto" (the default: "condensed" where the method takes it and the scene
+    has at most AUTO_CONDENSE contact nodes, else "full"; the same answer, and the Result's
+    options say which ran), "full" (every free node an unknown), "condensed" (K factored once, the
     method sees only the nodes that carry contacts, every displacement recovered from the same
     factorisation: :func:`contactqp.model.condense`) or "strain" (lagrange and qp only: the
     element elongations are unknowns too, tied to the displacements by equality rows whose
@@ -65,11 +70,26 @@ def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrang
     start = time.perf_counter()
     model = build_model(scene)
     built = time.perf_counter()
+    formulation = chosen_formulation(model, spec, formulation)
     solution = solve_model(model, spec, contact, formulation, options)
     solved = time.perf_counter()
     options = {**options, "formulation": formulation} if formulation != "full" else options
     return make_result(model, solution, method=method, contact=contact, options=options,
                        timings={"build": built - start, "solve": solved - built})
+
+
+def chosen_formulation(model: Model, spec: Method, formulation: str) -> str:
+    """The formulation "auto" stands for (:func:`solve`); any other is kept. Condensing costs
+    one solve with K per contact node and leaves the method a dense problem of that size; at a
+    few contact nodes it is the fast path (measured: a 10⁶-element bar with one wall, lagrange
+    0.11 s condensed against 0.16 s full, augmented 0.13 s against 0.89 s)."""
+    if formulation != "auto":
+        return formulation
+    C = model.C
+    if ("condensed" in spec.formulations and 0 < C.nnz <= 2 * AUTO_CONDENSE
+            and np.unique(C.indices).size <= AUTO_CONDENSE):
+        return "condensed"
+    return "full"
 
 
 def solve_model(model: Model, spec: Method, contact: str, formulation: str,
@@ -92,4 +112,4 @@ def solve_model(model: Model, spec: Method, contact: str, formulation: str,
                     solution.claimed_success, solution.info)
 
 
-__all__ = ["as_scene", "solve", "solve_model"]
+__all__ = ["AUTO_CONDENSE", "as_scene", "chosen_formulation", "solve", "solve_model"]

@@ -96,11 +96,11 @@ def checked_options(method: Any, contact: Any, formulation: Any,
         raise OptionError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     if not isinstance(contact, str) or contact not in CONTACT_KINDS:
         raise OptionError(f"contact must be one of {', '.join(CONTACT_KINDS)}; got {contact!r}")
-    if not isinstance(formulation, str) or formulation not in FORMULATIONS:
-        raise OptionError(f"formulation must be one of {', '.join(FORMULATIONS)}; "
+    if not isinstance(formulation, str) or formulation not in ("auto", *FORMULATIONS):
+        raise OptionError(f"formulation must be one of auto, {', '.join(FORMULATIONS)}; "
                           f"got {formulation!r}")
     spec = METHODS[method]
-    if formulation not in spec.formulations:
+    if formulation != "auto" and formulation not in spec.formulations:
         takes = [name for name, m in METHODS.items() if formulation in m.formulations]
         raise OptionError(
             f"formulation={formulation!r} is solved by the methods {', '.join(takes)}, not "

@@ -78,6 +78,12 @@ class WallsOnChain:
         self.n = n
         self.n_rows = model.n_contacts
         P = layout.nodal_loads
+        self.loads = P
+        self.running_load = np.cumsum(P)  # S_j = Σ_(i<=j) P_i over the chain
+        with np.errstate(invalid="ignore"):  # inf × 0 at a junction: never summed over
+            self.compliance_load = self.link_compliance * np.r_[self.running_load[:-1], 0.0]
+        self.bar_first = np.repeat(offsets[:-1], np.diff(offsets))  # each node's bar start
+        self.bar_last = np.repeat(offsets[1:] - 1, np.diff(offsets))  # and bar end
         self.force_tolerance_base = float(np.abs(P).max(initial=0.0))
         stiffness = float(model.band[0].max()) if model.band.size else 1.0
         self.displacement_floor = max(float(np.abs(model.g).max(initial=0.0)),
@@ -104,20 +110,43 @@ class WallsOnChain:
         order = np.argsort(xp, kind="stable")
         w = np.interp(phi, xp[order], fp[order])
         u = self.u_free - w
-        # slopes of w on each side of every held node (0 towards a free end)
-        # the compliance between held neighbours summed element by element, not as a
-        # difference of φ: a stiff element after soft ones is 1e-5 of φ, and its force would
-        # lose five digits (measured: 1.8 N of 1.76e10 N, 3.5e-6 of F, on a random scene)
-        between = np.add.reduceat(self.link_compliance, nodes)[:-1]
+        u[nodes] = target[nodes]  # exactly, not u_free − (u_free − target)
+        # the forces by statics from the loads, never from differences of displacements
+        # (a wall in a patch carries its node's load, q·h, while the displacements and the
+        # element forces beside it are 10⁶ times larger; measured: slopes of w left 8e-5 of
+        # the largest force at 10⁶ contacts). Between held neighbours a < b, elements a..b−1
+        # carry N_e = N_a − (S_e − S_a), S the running sum of the nodal loads, and
+        # Σ c_e N_e = u_b − u_a gives N_a; towards a free end N is the load beyond the cut.
+        S = self.running_load
+        c = self.link_compliance
+        sum_c = np.add.reduceat(c, nodes)[:-1]
+        sum_cS = np.add.reduceat(self.compliance_load, nodes)[:-1]
+        a, b = nodes[:-1], nodes[1:]
         with np.errstate(divide="ignore", invalid="ignore"):
-            slope = np.diff(w_held) / between
-        left = np.r_[0.0, slope]
-        right = np.r_[slope, 0.0]
-        left[first] = 0.0
-        right[last] = 0.0
-        # a + wall pushes in -x: its force is the concave kink of w; a - wall the convex one
-        force = np.where(held[1][nodes], left - right, right - left)
+            N_a = (target[b] - target[a] + sum_cS - S[a] * sum_c) / sum_c
+        # the element forces just right and just left of every held node
+        right = np.r_[N_a, 0.0]
+        left = np.r_[0.0, N_a - (S[b - 1] - S[a])]
+        head, tail = self.head_load(nodes[first]), self.tail_load(nodes[last])
+        left[first] = head  # − the loads from the bar's start up to the element before
+        right[last] = tail  # the loads beyond the node
+        reaction = left - right - self.loads[nodes]
+        # a + wall pushes in -x (its force is −R), a - wall in +x
+        force = np.where(held[1][nodes], -reaction, reaction)
         return u, nodes, force
+
+    def head_load(self, nodes: np.ndarray) -> np.ndarray:
+        """The force in the element just left of each of ``nodes``, the first held node of its
+        bar: minus the loads from the bar's start to the node before (0 at the bar's start)."""
+        S, start = self.running_load, self.bar_first[nodes]
+        before = np.where(start > 0, S[np.maximum(start - 1, 0)], 0.0)
+        return np.where(nodes > start, -(S[np.maximum(nodes - 1, 0)] - before), 0.0)
+
+    def tail_load(self, nodes: np.ndarray) -> np.ndarray:
+        """The force in the element just right of each of ``nodes``, the last held node of its
+        bar: the loads beyond it to the bar's end (0 at the bar's end)."""
+        S = self.running_load
+        return S[self.bar_last[nodes]] - S[nodes]
 
     def add_hull_walls(self, side: int, u: np.ndarray, pinned: np.ndarray, passed: np.ndarray,
                        tolerance: float) -> np.ndarray:
