@@ -154,12 +154,10 @@ def specs() -> list[Spec]:
 def skip_reason(spec: Spec, scene: contactqp.Scene, n_free: int,
                 estimate: float | None) -> str | None:
     """Why ``spec`` cannot fit ``scene``, or None."""
+    unknowns = scene.n_contacts if spec.formulation == "condensed" else n_free  # at most
     if (spec.method == "qp" and (spec.backend, spec.solver) in qpmod.DENSE_SOLVERS
-            and spec.formulation != "condensed" and n_free > qpmod.DENSE_LIMIT):
-        return f"dense solver, {n_free} unknowns > {qpmod.DENSE_LIMIT}"
-    if spec.formulation == "condensed" and scene.n_contacts > contactqp.model.CONDENSE_LIMIT:
-        return (f"condensed: {scene.n_contacts} contact nodes > "
-                f"{contactqp.model.CONDENSE_LIMIT} (a dense flexibility)")
+            and unknowns > qpmod.DENSE_LIMIT):
+        return f"dense solver, {unknowns} unknowns > {qpmod.DENSE_LIMIT}"
     if estimate is not None and estimate > BUDGET:
         return f"over budget: about {estimate:.0f} s per solve, from the previous size"
     return None

@@ -5,10 +5,10 @@ per method, the displacement of the load point (:meth:`Layout.load_point`), the 
 and the penetrations, each step a checked Result. Nothing is rebuilt per step that does not
 change with the loads:
 
-- lagrange, penalty and augmented: K is factored once (the condensed formulation,
-  :func:`contactqp.model.condense`); a step solves only the contact unknowns under the scaled
-  free displacements t·K⁻¹P and recovers u = t·K⁻¹P − K⁻¹Cᵀλ from the same factorisation.
-  Above :data:`contactqp.model.CONDENSE_LIMIT` contact nodes each step is a full solve.
+- lagrange, penalty and augmented: the model is condensed once onto its contact nodes (the
+  condensed formulation, :func:`contactqp.model.condense`, a chain); a step solves only the
+  contact unknowns under the scaled free displacements t·K⁻¹P and recovers
+  u = t·K⁻¹P − K⁻¹Cᵀλ by statics.
 - qp through cvxpy: the parametrised (DPP) problem is built once per structure and re-solved
   with new load parameters (its Result's ``info["cache"]`` says "hit").
 
@@ -27,7 +27,6 @@ import numpy as np
 from contactqp.errors import OptionError
 from contactqp.methods import checked_options
 from contactqp.model import (
-    CONDENSE_LIMIT,
     Condensed,
     Layout,
     Model,
@@ -133,7 +132,7 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
     for name, (method, contact, options) in methods.items():
         checked_options(method, contact, "full", options)
         if method in ("lagrange", "penalty", "augmented"):
-            if condensed is None and np.unique(model.C.indices).size <= CONDENSE_LIMIT:
+            if condensed is None:
                 start = time.perf_counter()
                 condensed = (condense(model), time.perf_counter() - start)
             results = _stepped(model, condensed, factors, method, contact, options)

@@ -29,7 +29,7 @@ import numpy as np
 from scipy.optimize import isotonic_regression
 
 from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
-from contactqp.model import Model
+from contactqp.model import Model, spread
 from contactqp.result import Solution
 
 
@@ -43,16 +43,12 @@ def applies(model: object, contact: str) -> bool:
 class WallsOnChain:
     """The arrays of a walls-only scene along its global node numbering (module docstring)."""
 
-    def __init__(self, model: Model) -> None:
+    def __init__(self, model: Model, load_factor: float = 1.0) -> None:
         layout = model.layout
         n = layout.n_nodes
         self.model = model
         offsets = layout.node_offsets
-        # φ strictly increasing over the whole chain: each bar after the last, one unit of
-        # its own compliance further on (the stretch between bars carries no node)
-        totals = np.array([b.compliance[-1] for b in layout.scene.bars])
-        shift = np.concatenate(([0.0], np.cumsum(2.0 * totals)))[:-1]
-        self.phi = layout.compliance + np.repeat(shift, np.diff(offsets))
+        self.phi = layout.chained_compliance  # φ along the whole chain, increasing
         self.bar = np.repeat(np.arange(offsets.size - 1), np.diff(offsets))
         self.bar_start = np.zeros(n, dtype=bool)
         self.bar_start[offsets[:-1]] = True
@@ -60,9 +56,8 @@ class WallsOnChain:
         self.bar_end[offsets[1:] - 1] = True
         self.support = np.zeros(n, dtype=bool)
         self.support[layout.support_nodes] = True
-        self.u_free = model.full_displacements(model.free_displacement)
-        with np.errstate(divide="ignore"):  # 1/k per link, inf across a junction; one past
-            self.link_compliance = np.r_[1.0 / layout.link_stiffness, 0.0]
+        self.u_free = load_factor * model.full_displacements(model.free_displacement)
+        self.link_compliance = layout.link_compliance  # 1/k per link, inf across a junction
         rows = layout.rows
         walls = len(layout.scene.walls)
         node, sign, gap = rows.node[:walls], rows.coefficient[:walls], rows.gap[:walls]
@@ -77,7 +72,7 @@ class WallsOnChain:
             self.bound[side], self.owner[side] = bound, owner
         self.n = n
         self.n_rows = model.n_contacts
-        P = layout.nodal_loads
+        P = load_factor * layout.nodal_loads
         self.loads = P
         self.running_load = np.cumsum(P)  # S_j = Σ_(i<=j) P_i over the chain
         with np.errstate(invalid="ignore"):  # inf × 0 at a junction: never summed over
@@ -97,18 +92,10 @@ class WallsOnChain:
         nodes = np.flatnonzero(pinned)
         target = np.where(held[1], self.bound[1], np.where(held[-1], -self.bound[-1], 0.0))
         w_held = self.u_free[nodes] - target[nodes]
-        phi = self.phi
-        # per bar, w flat from the bar's start to its first held node and from its last held
-        # node to the bar's end: anchors at the bar's ends with those values
         bar = self.bar[nodes]
-        first = np.r_[True, bar[1:] != bar[:-1]]
+        first = np.r_[True, bar[1:] != bar[:-1]]  # each bar's first and last held node
         last = np.r_[bar[1:] != bar[:-1], True]
-        starts = np.flatnonzero(self.bar_start)[bar[first]]
-        ends = np.flatnonzero(self.bar_end)[bar[last]]
-        xp = np.concatenate((phi[starts], phi[nodes], phi[ends]))
-        fp = np.concatenate((w_held[first], w_held, w_held[last]))
-        order = np.argsort(xp, kind="stable")
-        w = np.interp(phi, xp[order], fp[order])
+        w = spread(self.model.layout, nodes, w_held)
         u = self.u_free - w
         u[nodes] = target[nodes]  # exactly, not u_free − (u_free − target)
         # the forces by statics from the loads, never from differences of displacements
@@ -202,12 +189,12 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
     return vertices
 
 
-def solve_hull(model: Model, *, max_iterations: int | None = None
+def solve_hull(model: Model, *, max_iterations: int | None = None, load_factor: float = 1.0
                ) -> tuple[Solution | None, np.ndarray]:
-    """The hull loop (module docstring). Returns (the Solution, None-free) or, when the set
-    cycles or the steps run out, (None, the active rows reached) for the textbook loop to
-    finish from."""
-    chain = WallsOnChain(model)
+    """The hull loop (module docstring) on ``model`` with its loads times ``load_factor``.
+    Returns (the Solution, an empty array) or, when the set cycles or the steps run out,
+    (None, the active rows reached) for the textbook loop to finish from."""
+    chain = WallsOnChain(model, load_factor)
     held = {1: np.zeros(chain.n, dtype=bool), -1: np.zeros(chain.n, dtype=bool)}
     limit = default_max_iterations(chain.n_rows) if max_iterations is None else max_iterations
     seen: set[bytes] = set()

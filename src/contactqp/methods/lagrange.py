@@ -10,6 +10,8 @@ the contacts are walls alone on the full formulation; elsewhere "hull" is the te
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
@@ -138,7 +140,7 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
     """Lagrange multipliers; ``contact`` "equality" (every wall holds) or "inequality";
     ``formulation`` "full" (unknowns u) or "strain" (u and the element elongations e, tied by
     equality rows whose multipliers, the element forces, go to the Solution's info)."""
-    K, P, C, g = model.K, model.P, model.C, model.g
+    P, C, g = model.P, model.C, model.g  # K (sparse) only where the loop needs it
     element_force: list[np.ndarray] = []
 
     def step(active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -146,7 +148,7 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
             u, forces, lam_active = solve_strain_saddle_point(model, active)
             element_force[:] = [forces]
         else:
-            u, lam_active = solve_saddle_point(K, P, C[active], g[active])
+            u, lam_active = solve_saddle_point(model.K, P, C[active], g[active])
         lam = np.zeros(model.n_contacts)
         lam[active] = lam_active
         return u, lam
@@ -157,15 +159,20 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
 
     def update(active: np.ndarray, u: np.ndarray, lam: np.ndarray) -> np.ndarray:
         pen = C @ u - g
-        disp_tol = displacement_tolerance(u, g, P, K)
+        disp_tol = displacement_tolerance(u, g, P, model.K)
         force_tol = DECISION_RTOL * max(np.abs(P).max(initial=0.0), np.abs(lam).max(initial=0.0))
         kept = active & (lam > -force_tol)
         return independent_rows(C, kept, np.flatnonzero(~active & (pen > disp_tol)), pen, lam)
 
     start, info = None, _strain_info(element_force)
-    if active_set == "hull" and formulation == "full" and hull.applies(model, contact):
-        solution, start = hull.solve_hull(model, max_iterations=max_iterations)
+    chain = model.full if isinstance(model, Condensed) else model  # the hull works on the chain
+    if active_set == "hull" and formulation == "full" and hull.applies(chain, contact):
+        factor = model.load_factor if isinstance(model, Condensed) else 1.0
+        solution, start = hull.solve_hull(chain, max_iterations=max_iterations,
+                                          load_factor=factor)
         if solution is not None:
+            if chain is not model:  # the condensed unknowns are the contact nodes' u
+                solution = replace(solution, u_free=solution.u_free[model.nodes])
             return solution
         info = {"active_set": "hull, then passed (the hull's set came back)"}
     u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="lagrange",

@@ -16,7 +16,7 @@ from contactqp.model.chain import (
     wall_stiffness,
     without_circulation,
 )
-from contactqp.model.condense import CONDENSE_LIMIT, Condensed, condense
+from contactqp.model.condense import Condensed, condense
 from contactqp.model.layout import (
     ContactRows,
     Layout,
@@ -29,11 +29,12 @@ from contactqp.model.layout import (
     node_set,
     penetration,
     seen_stiffness,
+    spread,
 )
 
 __all__ = [
-    "CONDENSE_LIMIT", "Condensed", "ContactRows", "Layout", "Model", "build_model", "condense",
+    "Condensed", "ContactRows", "Layout", "Model", "build_model", "condense",
     "contact_forces_on_nodes", "determinate_chain_solve", "displacement_scale",
     "element_forces", "elongation_rows", "in_set", "largest", "link_forces",
-    "load_force_scale", "node_set", "penetration", "seen_stiffness", "wall_stiffness", "without_circulation",
+    "load_force_scale", "node_set", "penetration", "seen_stiffness", "spread", "wall_stiffness", "without_circulation",
 ]

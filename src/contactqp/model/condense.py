@@ -1,5 +1,13 @@
 """A model condensed onto its contact nodes: the small problem a method solves when the bar is
-long and the contacts few, and how every displacement comes back from it."""
+long and the contacts few, and how every displacement comes back from it.
+
+Static condensation of a chain onto some of its nodes is again a chain: the elements between
+two kept nodes (or a kept node and a support) act in series, stiffness 1 / Σ L/(EA), and a
+stretch beyond the last kept node towards a free end carries nothing. So the condensed
+stiffness S⁻¹ (S = B K⁻¹ Bᵀ the flexibility between the contact nodes, B selecting them) is
+tridiagonal, built in O(n) from sums of compliances, and never formed as a dense matrix: any
+number of contact nodes, every method and QP solver sees a banded problem.
+"""
 
 from __future__ import annotations
 
@@ -7,32 +15,30 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
-from contactqp.errors import OptionError, SolverError
+from contactqp import linalg
+from contactqp.errors import SolverError
 from contactqp.model.chain import Model, displacement_scale
-from contactqp.model.layout import Layout
-
-CONDENSE_LIMIT = 2000  # contact nodes: the condensed flexibility is a dense square of this size
+from contactqp.model.layout import Layout, node_set, spread
 
 
 @dataclass(frozen=True, eq=False)
 class Condensed:
     """The problem in the contact nodes only: one unknown per node that carries a contact, its
-    stiffness S⁻¹ (S = B K⁻¹ Bᵀ the flexibility between those nodes, B selecting them), its
-    load S⁻¹ w₀ (w₀ = B K⁻¹ P their free displacements), the same contact rows and gaps. A
-    method solves it like a Model; then u = K⁻¹P − K⁻¹Cᵀλ (:meth:`displacements`), from the
-    same factorisation of K (``u0`` = K⁻¹P and ``X`` = K⁻¹Bᵀ).
+    tridiagonal stiffness S⁻¹ (``band``: LAPACK lower band storage, diagonal then
+    sub-diagonal), its load S⁻¹ w₀ (w₀ the nodes' free displacements), the same contact rows
+    and gaps. A method solves it like a Model; then every displacement follows from the
+    contact forces by statics (:meth:`displacements`).
     """
 
     full: Model
     nodes: np.ndarray  # the contact nodes, as unknowns of ``full``
-    S_inverse: np.ndarray
+    band: np.ndarray
     P: np.ndarray
     C: sp.csr_array
-    u0: np.ndarray
-    X: np.ndarray
+    u0: np.ndarray  # K⁻¹P over the full model's unknowns
+    load_factor: float = 1.0  # the loads are ``full``'s times this (a step of a load path)
 
     @property
     def layout(self) -> Layout:
@@ -44,7 +50,10 @@ class Condensed:
 
     @cached_property
     def K(self) -> sp.csr_array:
-        return sp.csr_array(self.S_inverse)
+        """S⁻¹ as a sparse tridiagonal matrix."""
+        band = self.band
+        return sp.csr_array(sp.diags_array([band[1, :-1], band[0], band[1, :-1]],
+                                           offsets=[-1, 0, 1]))
 
     @property
     def n_free(self) -> int:
@@ -55,9 +64,15 @@ class Condensed:
         return int(self.g.size)
 
     def solve_K(self, rhs: np.ndarray) -> np.ndarray:
-        """S rhs: the condensed stiffness inverted by its flexibility."""
-        flexibility = self.X[self.nodes]
-        return flexibility @ np.asarray(rhs, dtype=float)
+        """S rhs: the condensed chain solved (banded Cholesky, LAPACK pbsv)."""
+        rhs = np.asarray(rhs, dtype=float)
+        if self.nodes.size == 0:
+            return rhs.copy()
+        try:
+            return linalg.solve_spd_band(self.band, rhs)
+        except np.linalg.LinAlgError as error:
+            raise SolverError(f"condensed formulation: the condensed stiffness is not "
+                              f"positive definite ({error})") from None
 
     solve_K_and_loads = solve_K
 
@@ -72,42 +87,59 @@ class Condensed:
         return displacement_scale(self.free_displacement, self.g, self.layout.scene)
 
     def displacements(self, contact_force: np.ndarray) -> np.ndarray:
-        """Free-node displacements of the full model under contact forces λ."""
-        return self.u0 - self.X @ (self.C.T @ np.asarray(contact_force, dtype=float))
+        """Free-node displacements of the full model under contact forces λ: u = K⁻¹P −
+        K⁻¹Cᵀλ, the second term by statics: S Cᵀλ at the contact nodes (one banded solve),
+        spread along the chain (:func:`contactqp.model.layout.spread`: forces at the contact
+        nodes alone move the rest linearly in the compliance)."""
+        push = self.C.T @ np.asarray(contact_force, dtype=float)
+        moved = self.solve_K(push)
+        layout, full = self.layout, self.full
+        anchors = node_set(layout.n_nodes, layout.support_nodes, full.free[self.nodes])
+        values = np.zeros(layout.n_nodes)
+        values[full.free[self.nodes]] = moved
+        return self.u0 - spread(layout, anchors, values[anchors])[full.free]
 
     def scaled(self, factor: float) -> Condensed:
         """The same problem with every load times ``factor`` (a step of a load path: the
-        factorisation of K is reused)."""
-        return Condensed(self.full, self.nodes, self.S_inverse, factor * self.P, self.C,
-                         factor * self.u0, self.X)
+        condensed chain is reused)."""
+        return Condensed(self.full, self.nodes, self.band, factor * self.P, self.C,
+                         factor * self.u0, factor * self.load_factor)
 
 
 def condense(model: Model) -> Condensed:
-    """Condense a model onto its contact nodes with one factorisation of K and one solve per
-    contact node plus one for the loads."""
-    nodes = np.unique(model.C.indices)
-    if nodes.size > CONDENSE_LIMIT:
-        raise OptionError(
-            f"formulation='condensed': {nodes.size} contact nodes give a dense "
-            f"{nodes.size}x{nodes.size} flexibility (limit {CONDENSE_LIMIT}); use 'full'"
-        )
-    rhs = np.zeros((model.n_free, nodes.size + 1), order="F")  # columns contiguous
-    rhs[:, 0] = model.P
-    rhs[nodes, np.arange(1, nodes.size + 1)] = 1.0
-    solved = model.solve_K(rhs)
-    model.__dict__.setdefault("free_displacement", solved[:, 0])  # K⁻¹P, for the check
-    flexibility = solved[nodes, 1:]
-    try:
-        stiffness = sla.inv(flexibility, check_finite=False) if nodes.size else flexibility
-    except np.linalg.LinAlgError as error:
-        raise SolverError(f"condensed formulation: the flexibility is singular ({error})") from None
-    stiffness = 0.5 * (stiffness + stiffness.T)
-    u0, X = solved[:, 0], solved[:, 1:]
+    """Condense a model onto its contact nodes (module docstring): one solve for K⁻¹P (by
+    statics where every bar has one support) and O(n) sums for the condensed chain."""
+    layout = model.layout
+    nodes = np.flatnonzero(np.bincount(model.C.indices, minlength=model.n_free))
+    u0 = model.free_displacement
+    kept = model.free[nodes]  # global numbers, increasing
+    anchors = node_set(layout.n_nodes, layout.support_nodes, kept)
+    # the compliance between neighbouring anchors, element by element (inf across bars)
+    between = np.add.reduceat(layout.link_compliance, anchors)[:-1] if anchors.size else (
+        np.zeros(0))
+    with np.errstate(divide="ignore"):
+        series = 1.0 / between  # 0 across a junction
+    is_kept = np.zeros(layout.n_nodes, dtype=bool)
+    is_kept[kept] = True
+    position = np.flatnonzero(is_kept[anchors])  # where each kept node sits among anchors
+    to_left = np.where(position > 0, series[np.maximum(position - 1, 0)], 0.0)
+    to_right = np.where(position < anchors.size - 1,
+                        series[np.minimum(position, max(series.size - 1, 0))]
+                        if series.size else 0.0, 0.0)
+    band = np.zeros((2, nodes.size))
+    band[0] = to_left + to_right
+    # a kept node and the next anchor, also kept: the series spring between them couples them
+    adjacent = np.r_[position[1:] == position[:-1] + 1, False]
+    band[1] = np.where(adjacent, -to_right, 0.0)
     column = np.full(model.n_free, -1)
     column[nodes] = np.arange(nodes.size)
     C = model.C.tocoo()
     reduced_C = sp.csr_array((C.data, (C.row, column[C.col])), shape=(model.n_contacts, nodes.size))
-    return Condensed(model, nodes, stiffness, stiffness @ u0[nodes], reduced_C, u0, X)
+    w0 = u0[nodes]
+    load = band[0] * w0
+    load[:-1] += band[1, :-1] * w0[1:]
+    load[1:] += band[1, :-1] * w0[:-1]
+    return Condensed(model, nodes, band, load, reduced_C, u0)
 
 
-__all__ = ["CONDENSE_LIMIT", "Condensed", "condense"]
+__all__ = ["Condensed", "condense"]

@@ -102,6 +102,22 @@ class Layout:
         return self._per_element([b.compliance for b in self.scene.bars])
 
     @cached_property
+    def chained_compliance(self) -> np.ndarray:
+        """φ strictly increasing over the whole chain: each bar's :attr:`compliance`, shifted
+        past the bar before by twice that bar's own (no node lies between bars), for
+        interpolating along the chain (:func:`spread`)."""
+        totals = np.array([b.compliance[-1] for b in self.scene.bars])
+        shift = np.concatenate(([0.0], np.cumsum(2.0 * totals)))[:-1]
+        return _read_only(self.compliance + np.repeat(shift, np.diff(self.node_offsets)))
+
+    @cached_property
+    def link_compliance(self) -> np.ndarray:
+        """1/k of the link from global node j to j + 1 (m/N), inf at a junction, and one 0
+        past the last node (for sums between nodes with numpy reduceat)."""
+        with np.errstate(divide="ignore"):
+            return _read_only(np.r_[1.0 / self.link_stiffness, 0.0])
+
+    @cached_property
     def link_stiffness(self) -> np.ndarray:
         """The stiffness between global nodes j and j + 1 (N/m): the element's, 0 at a
         junction."""
@@ -227,6 +243,23 @@ def penetration(layout: Layout, u: np.ndarray) -> np.ndarray:
     return closed - rows.gap
 
 
+def spread(layout: Layout, anchors: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """The displacement of every node that forces at the nodes ``anchors`` alone cause (sorted
+    global nodes, every support among them), from its ``values`` there (0 at a support):
+    linear in the compliance φ between two anchors of a bar, constant beyond a bar's outermost
+    anchor towards its free end (no force passes there). O(n) (numpy.interp)."""
+    offsets = layout.node_offsets
+    phi = layout.chained_compliance
+    bar = layout.bar_of(anchors)
+    first = np.r_[True, bar[1:] != bar[:-1]]
+    last = np.r_[bar[1:] != bar[:-1], True]
+    xp = np.concatenate((phi[offsets[:-1][bar[first]]], phi[anchors],
+                         phi[offsets[1:][bar[last]] - 1]))
+    fp = np.concatenate((values[first], values, values[last]))
+    order = np.argsort(xp, kind="stable")
+    return np.interp(phi, xp[order], fp[order])
+
+
 def node_set(n_nodes: int, *nodes: np.ndarray) -> np.ndarray:
     """The sorted distinct node numbers in ``nodes`` (arrays of global node numbers), by a
     mask over the chain: O(n) without a sort (np.unique sorts or hashes, 5 ms at 10⁵)."""
@@ -302,4 +335,4 @@ def load_force_scale(layout: Layout) -> float:
 
 __all__ = ["ContactRows", "Layout", "contact_forces_on_nodes", "element_forces", "in_set",
            "largest", "link_forces", "load_force_scale", "node_set", "penetration",
-           "seen_stiffness"]
+           "seen_stiffness", "spread"]
