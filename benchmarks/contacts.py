@@ -34,7 +34,13 @@ from contactqp.reference import reference
 OBSTACLES: dict[str, Callable[[int], contactqp.Scene]] = {
     "obstacle": obstacle, "channel": channel, "patch": flat_patch}
 RUNS = [("lagrange", {}), ("lagrange", {"active_set": "passed"}), ("augmented", {}),
-        ("penalty", {}), ("qp", {"backend": "clarabel"}), ("qp", {"backend": "osqp"})]
+        ("penalty", {}), ("qp", {"backend": "clarabel"}), ("qp", {"backend": "osqp"}),
+        # the condensed chain (one unknown per contact node, tridiagonal): every QP backend
+        ("augmented", {"formulation": "condensed"}),
+        ("qp", {"backend": "clarabel", "formulation": "condensed"}),
+        ("qp", {"backend": "osqp", "formulation": "condensed"}),
+        ("qp", {"backend": "cvxpy", "formulation": "condensed"}),
+        ("qp", {"backend": "qpsolvers", "solver": "piqp", "formulation": "condensed"})]
 BUDGET = 20.0  # s for one solve
 PROJECTION = 30.0  # a tenfold larger case takes this much longer, until measured
 GOAL = 10.0  # the goal: the verified answer at 10⁵ contacts within 10 floors
@@ -116,8 +122,10 @@ def draw(rows: list[dict], path: Path) -> None:
 
     colours = {"lagrange/hull": "tab:blue", "lagrange/passed": "tab:cyan",
                "augmented": "tab:green", "penalty": "tab:orange", "qp/clarabel": "tab:red",
-               "qp/osqp": "tab:purple"}
-    figure, axes = plt.subplots(2, len(OBSTACLES), figsize=(13, 7), sharex=True)
+               "qp/osqp": "tab:purple", "augmented/condensed": "olive",
+               "qp/clarabel/condensed": "salmon", "qp/osqp/condensed": "orchid",
+               "qp/cvxpy/condensed": "tab:brown", "qp/qpsolvers/piqp/condensed": "tab:gray"}
+    figure, axes = plt.subplots(2, len(OBSTACLES), figsize=(14, 8), sharex=True)
     for column, name in enumerate(OBSTACLES):
         for run, colour in colours.items():
             mine = sorted((r for r in rows if r["obstacle"] == name and r["run"] == run
@@ -140,10 +148,10 @@ def draw(rows: list[dict], path: Path) -> None:
         axes[1, column].set_xlabel("contacts")
     axes[0, 0].set_ylabel("iterations")
     axes[1, 0].set_ylabel("time / one banded solve of K")
-    axes[0, -1].legend(fontsize=7, loc="upper left")
-    axes[1, -1].legend(fontsize=7, loc="upper left")
+    handles, labels = axes[1, 0].get_legend_handles_labels()
+    figure.legend(handles, labels, fontsize=7, loc="lower center", ncol=6)
     figure.suptitle("Many contacts: iterations and time against the number of contacts "
                     "(dashed: the goal, 10 floors)")
-    figure.tight_layout()
+    figure.tight_layout(rect=(0, 0.07, 1, 1))
     figure.savefig(path, dpi=110)
     plt.close(figure)
