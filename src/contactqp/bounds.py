@@ -40,9 +40,12 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     rows, row_nodes, _, _ = layout.rows
     pen = penetration(layout, u)
     equality = contact == "equality"
-    pushing = _pushing(layout, lam, pen, hold * F, equality)
-    held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[pushing[rows]])
-    s, s_ends = row_stiffness(layout, held, pushing, ends=True)
+    pushing, chosen = _pushing(layout, lam, pen, hold * F, equality)
+    if chosen is not None and np.array_equal(chosen[0], pushing):
+        held, s, s_ends = chosen[1:]  # the same rows push: the same stiffnesses
+    else:
+        held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[pushing[rows]])
+        s, s_ends = row_stiffness(layout, held, pushing, ends=True)
     delta = np.abs(pen) if equality else np.where(pushing, np.abs(pen), np.maximum(pen, 0.0))
     moved = np.where(pushing, 0.0, lam)  # an open row's force (or a pull) becomes a load
     n_loads = external.size - row_nodes.size - layout.support_nodes.size
@@ -90,17 +93,19 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
 
 
 def _pushing(layout: Layout, lam: np.ndarray, pen: np.ndarray, hold: float,
-             equality: bool) -> np.ndarray:
+             equality: bool) -> tuple[np.ndarray, tuple | None]:
     """Which rows the nearby scene holds: every row for equality contact; else those whose
     force exceeds what closing their gap takes (the stiffness seen with the rows pushing
-    more than ``hold`` held), so that closing the gap is the smaller move."""
+    more than ``hold`` held), so that closing the gap is the smaller move. Also (the rows
+    taken as pushing for the stiffness, the held nodes, the row and end stiffnesses), for
+    the caller to reuse when the same rows come out."""
     rows, row_nodes, _, gaps = layout.rows
     if equality:
-        return np.ones(gaps.size, dtype=bool)
+        return np.ones(gaps.size, dtype=bool), None
     strong = lam > hold
     held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[strong[rows]])
-    s = row_stiffness(layout, held, strong)
-    return lam > np.maximum(-pen, 0.0) * s
+    s, s_ends = row_stiffness(layout, held, strong, ends=True)
+    return lam > np.maximum(-pen, 0.0) * s, (strong, held, s, s_ends)
 
 
 def propagate(layout: Layout, held: np.ndarray, links: np.ndarray, nodes: np.ndarray,
@@ -116,17 +121,14 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray, nodes: np.nda
     has c the cut residual past the bar's free end. The displacement error is the running sum
     of the elongation errors from the held end, and a held node's force error is the jump of c
     across it."""
-    offsets = layout.node_offsets
     outside = np.cumsum(np.bincount(nodes, external, minlength=layout.n_nodes))
-    k = layout.link_stiffness
-    element = np.flatnonzero(k > 0.0)
+    element, compliance = layout.elements
     if element.size == 0:
         return 0.0, 0.0
     r = (links + outside[:-1])[element]
-    compliance = 1.0 / k[element]
     bar = layout.bar_of(element)
     position = _count_at_or_before(layout.n_nodes, held, element)  # held nodes up to the start
-    first, last = offsets[bar], offsets[bar + 1] - 1
+    first, last = layout.bar_ends[0][element], layout.bar_ends[1][element]
     left_held = (position > 0) & (held[np.maximum(position - 1, 0)] >= first)
     right_held = (position < held.size) & (held[np.minimum(position, held.size - 1)] <= last)
     run = position * len(layout.scene.bars) + bar
@@ -150,9 +152,8 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray, nodes: np.nda
     sway = largest(np.where(anchored_left, from_left, from_right))
     # force error at each held node: the jump of c between the elements on either side of it
     # (past a bar's end, the cut residual there)
-    held_bar = np.searchsorted(offsets, held, side="right") - 1
-    start, end = offsets[held_bar], offsets[held_bar + 1] - 1
-    at = np.searchsorted(element, np.r_[held - 1, held].clip(0, element[-1]))
+    start, end = layout.bar_ends[0][held], layout.bar_ends[1][held]
+    at = layout.element_position[np.concatenate((held - 1, held)).clip(0, element[-1])]
     c_at = c[np.minimum(at, c.size - 1)]
     c_left = np.where(held > start, c_at[: held.size],
                       np.where(start > 0, outside[np.maximum(start - 1, 0)], 0.0))
@@ -201,8 +202,11 @@ def gap_moves(layout: Layout, held: np.ndarray, nodes: np.ndarray, delta: np.nda
     if moving.size == 0:
         return 0.0, 0.0, (moving, np.zeros(0))
     by_node = np.zeros(moving.size)
-    listed = in_set(layout.n_nodes, nodes, moving)
-    np.maximum.at(by_node, np.searchsorted(moving, nodes[listed]), delta[listed])
+    index = np.full(layout.n_nodes, -1, dtype=np.intp)  # each moving node's place in moving
+    index[moving] = np.arange(moving.size)
+    place = index[nodes]
+    listed = place >= 0
+    np.maximum.at(by_node, place[listed], delta[listed])
     n_walls = len(layout.scene.walls)
     tied = [(int(np.searchsorted(moving, layout.node(c.bar_a, c.node_a))),
              int(np.searchsorted(moving, layout.node(c.bar_b, c.node_b))))
@@ -219,7 +223,7 @@ def gap_moves(layout: Layout, held: np.ndarray, nodes: np.ndarray, delta: np.nda
             group[root(a)] = root(b)
         members = np.array([root(i) for i in range(moving.size)])
         by_node = np.bincount(members, by_node, minlength=moving.size)[members]
-    bar = np.searchsorted(layout.node_offsets, moving, side="right") - 1
+    bar = layout.bar_of(moving)
     same = bar[1:] == bar[:-1]
     with np.errstate(divide="ignore"):
         link = np.where(same, 1.0 / np.diff(layout.compliance[moving]), 0.0)  # 1/c to the next
@@ -244,8 +248,12 @@ def _closing(layout: Layout, moves: tuple[np.ndarray, np.ndarray], row_nodes: np
     induced = np.maximum(np.where((after > 0) & (held_bar[left] == bar), shift[left], 0.0),
                          np.where((after < held.size) & (held_bar[right] == bar), shift[right],
                                   0.0))
-    per_row = np.zeros(stand_off.size)
-    np.maximum.at(per_row, rows, induced)
+    if rows.size == stand_off.size:  # one entry per row (walls): no two to take the max of
+        per_row = np.zeros(stand_off.size)
+        per_row[rows] = induced
+    else:
+        per_row = np.zeros(stand_off.size)
+        np.maximum.at(per_row, rows, induced)
     return largest(np.maximum(per_row - stand_off, 0.0) * np.where(np.isfinite(stand_off), s, 0.0))
 
 
@@ -282,10 +290,9 @@ def _both_sides(layout: Layout, lam: np.ndarray) -> float:
     free = ~in_set(layout.n_nodes, nodes, layout.support_nodes)
     entries = np.bincount(rows[free], minlength=gaps.size)
     single = free & (entries[rows] == 1)  # a wall, or a contact with one end held
-    plus = np.zeros(layout.n_nodes)
-    minus = np.zeros(layout.n_nodes)
-    np.add.at(plus, nodes[single & (coefficients > 0)], force[rows[single & (coefficients > 0)]])
-    np.add.at(minus, nodes[single & (coefficients < 0)], force[rows[single & (coefficients < 0)]])
+    up, down = single & (coefficients > 0), single & (coefficients < 0)
+    plus = np.bincount(nodes[up], force[rows[up]], minlength=layout.n_nodes)
+    minus = np.bincount(nodes[down], force[rows[down]], minlength=layout.n_nodes)
     common = largest(np.minimum(plus, minus))
     for cycle in layout.tight_cycles:  # loops through bar contacts (Layout.tight_cycles)
         common = max(common, float(force[list(cycle)].min()))

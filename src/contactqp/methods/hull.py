@@ -47,29 +47,17 @@ class WallsOnChain:
         layout = model.layout
         n = layout.n_nodes
         self.model = model
-        offsets = layout.node_offsets
         self.phi = layout.chained_compliance  # φ along the whole chain, increasing
-        self.bar = np.repeat(np.arange(offsets.size - 1), np.diff(offsets))
+        self.bar = layout.node_bar
+        offsets = layout.node_offsets
         self.bar_start = np.zeros(n, dtype=bool)
         self.bar_start[offsets[:-1]] = True
-        self.bar_end = np.zeros(n, dtype=bool)
-        self.bar_end[offsets[1:] - 1] = True
-        self.support = np.zeros(n, dtype=bool)
-        self.support[layout.support_nodes] = True
+        self.support = layout.support_mask
         self.u_free = load_factor * model.full_displacements(model.free_displacement)
         self.link_compliance = layout.link_compliance  # 1/k per link, inf across a junction
-        rows = layout.rows
-        walls = len(layout.scene.walls)
-        node, sign, gap = rows.node[:walls], rows.coefficient[:walls], rows.gap[:walls]
-        self.bound, self.owner = {}, {}  # per side: the wall's gap, its row, at each node
-        for side, s in ((1, 1.0), (-1, -1.0)):
-            # a scene has at most one wall per node and side (contactqp.scene refuses more)
-            order = np.flatnonzero((sign == s) & ~self.support[node])
-            bound = np.full(n, np.inf)
-            bound[node[order]] = gap[order]
-            owner = np.full(n, -1, dtype=np.intp)
-            owner[node[order]] = order
-            self.bound[side], self.owner[side] = bound, owner
+        # per side: the wall's gap and its row at each node (Layout.walls_by_side)
+        self.bound = {side: bound for side, (bound, _) in layout.walls_by_side.items()}
+        self.owner = {side: owner for side, (_, owner) in layout.walls_by_side.items()}
         self.n = n
         self.n_rows = model.n_contacts
         P = load_factor * layout.nodal_loads
@@ -77,8 +65,7 @@ class WallsOnChain:
         self.running_load = np.cumsum(P)  # S_j = Σ_(i<=j) P_i over the chain
         with np.errstate(invalid="ignore"):  # inf × 0 at a junction: never summed over
             self.compliance_load = self.link_compliance * np.r_[self.running_load[:-1], 0.0]
-        self.bar_first = np.repeat(offsets[:-1], np.diff(offsets))  # each node's bar start
-        self.bar_last = np.repeat(offsets[1:] - 1, np.diff(offsets))  # and bar end
+        self.bar_first, self.bar_last = layout.bar_ends  # each node's bar's first and last
         self.force_tolerance_base = float(np.abs(P).max(initial=0.0))
         stiffness = float(model.band[0].max()) if model.band.size else 1.0
         self.displacement_floor = max(float(np.abs(model.g).max(initial=0.0)),

@@ -54,7 +54,57 @@ class Layout:
         """The bar of each of ``nodes`` (global)."""
         if len(self.scene.bars) == 1:
             return np.zeros(np.shape(nodes), dtype=np.intp)
-        return np.searchsorted(self.node_offsets, nodes, side="right") - 1
+        return self.node_bar[nodes]
+
+    @cached_property
+    def node_bar(self) -> np.ndarray:
+        """The bar of every global node."""
+        return _read_only(np.repeat(np.arange(len(self.scene.bars)), np.diff(self.node_offsets)))
+
+    @cached_property
+    def bar_ends(self) -> tuple[np.ndarray, np.ndarray]:
+        """(first node, last node) of every global node's bar."""
+        sizes = np.diff(self.node_offsets)
+        return (_read_only(np.repeat(self.node_offsets[:-1], sizes)),
+                _read_only(np.repeat(self.node_offsets[1:] - 1, sizes)))
+
+    @cached_property
+    def elements(self) -> tuple[np.ndarray, np.ndarray]:
+        """(the links that are elements, as the global node each starts at; their
+        compliance 1/k): every link but the junctions between bars."""
+        element = np.flatnonzero(self.link_stiffness > 0.0)
+        return _read_only(element), _read_only(1.0 / self.link_stiffness[element])
+
+    @cached_property
+    def element_position(self) -> np.ndarray:
+        """For every global node j, the index in :attr:`elements` of the first element
+        starting at or after j (np.searchsorted, once per scene)."""
+        return _read_only(np.searchsorted(self.elements[0], np.arange(self.n_nodes)))
+
+    @cached_property
+    def support_mask(self) -> np.ndarray:
+        """Whether each global node is held by a support."""
+        mask = np.zeros(self.n_nodes, dtype=bool)
+        mask[self.support_nodes] = True
+        return _read_only(mask)
+
+    @cached_property
+    def walls_by_side(self) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+        """Per side (+1: u <= gap, −1: −u <= gap): the gap of the wall at every global node
+        (inf where none) and its row (−1 where none). A scene has at most one wall per node
+        and side (contactqp.scene refuses more); walls at supports are left out."""
+        rows = self.rows
+        walls = len(self.scene.walls)
+        node, sign, gap = rows.node[:walls], rows.coefficient[:walls], rows.gap[:walls]
+        sides = {}
+        for side in (1, -1):
+            order = np.flatnonzero((sign == side) & ~self.support_mask[node])
+            bound = np.full(self.n_nodes, np.inf)
+            bound[node[order]] = gap[order]
+            owner = np.full(self.n_nodes, -1, dtype=np.intp)
+            owner[node[order]] = order
+            sides[side] = (_read_only(bound), _read_only(owner))
+        return sides
 
     @property
     def n_nodes(self) -> int:
