@@ -106,10 +106,33 @@ def main(quick: bool, out: Path) -> None:
     (out / "contacts.json").write_text(json.dumps({"machine": machine(), "data": rows},
                                                   indent=1))
     draw(rows, out / "contacts.png")
+    (out / "contacts.md").write_text(table(rows))
     hull = [r for r in rows if r["run"] == "lagrange/hull" and r["contacts"] == 10**5]
     for r in hull:
         print(f"goal at 10⁵ contacts, {r['obstacle']}: verified answer in {r['ratio']:.1f} "
               f"floors (method {r['method_ratio']:.1f}), goal {GOAL:.0f}")
+
+
+def table(rows: list[dict]) -> str:
+    """The README's table: per obstacle and size, each run's time as floors end to end (the
+    method alone in brackets), its iterations, its force error and whether it was verified."""
+    runs = [label(m, o) for m, o in RUNS]
+    lines = ["| obstacle | contacts | " + " | ".join(runs) + " |",
+             "|---|---|" + "---|" * len(runs)]
+    for name in OBSTACLES:
+        for n in sorted({r["contacts"] for r in rows if r["obstacle"] == name}):
+            cells = []
+            for run in runs:
+                row = next((r for r in rows if r["obstacle"] == name and r["contacts"] == n
+                            and r["run"] == run), None)
+                if row is None or "seconds" not in row:
+                    cells.append("–")
+                    continue
+                mark = "" if row["verified"] else ", flagged"
+                cells.append(f"{row['ratio']:.0f} ({row['method_ratio']:.0f}), "
+                             f"{row['iterations']} it, {row['force_error']:.0e}{mark}")
+            lines.append(f"| {name} | {n:.0e} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def draw(rows: list[dict], path: Path) -> None:
