@@ -13,7 +13,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from contactqp.model import Layout, in_set, largest, node_set, penetration, seen_stiffness
+from contactqp.model import (
+    Layout,
+    count_up_to,
+    in_set,
+    largest,
+    node_set,
+    penetration,
+    seen_stiffness,
+)
 
 ROUND_OFF = 4.0 * np.finfo(float).eps  # a few units in the last place of what is stored
 
@@ -27,9 +35,10 @@ class Bounds:
 
 def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarray,
                  nodes: np.ndarray, external: np.ndarray, r_max: float, contact: str,
-                 F: float, U: float, hold: float) -> Bounds:
+                 F: float, U: float, hold: float, outside: np.ndarray | None = None) -> Bounds:
     """The residuals and the error bounds of an answer (module docstring); a contact whose
-    force passes ``hold`` × F counts as pushing when the held nodes are chosen.
+    force passes ``hold`` × F counts as pushing when the held nodes are chosen. ``outside``:
+    the running sum of ``external`` over the nodes, when the caller has it.
 
     The answer is exact for a nearby scene: the rows that push are held at where the answer
     puts them (their gaps moved by δ = |penetration|), the other rows' forces and every
@@ -49,9 +58,13 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     delta = np.abs(pen) if equality else np.where(pushing, np.abs(pen), np.maximum(pen, 0.0))
     moved = np.where(pushing, 0.0, lam)  # an open row's force (or a pull) becomes a load
     n_loads = external.size - row_nodes.size - layout.support_nodes.size
-    kept_external = external.copy()  # the contacts of the nearby scene carry only the rest
-    kept_external[n_loads:n_loads + row_nodes.size][~pushing[rows]] = 0.0
-    force_error, sway = propagate(layout, held, links, nodes, kept_external)
+    # the contacts of the nearby scene carry only the rest
+    contact_part = slice(n_loads, n_loads + row_nodes.size)
+    if outside is None or np.any(external[contact_part][~pushing[rows]]):
+        kept_external = external.copy()
+        kept_external[contact_part][~pushing[rows]] = 0.0
+        outside = np.cumsum(np.bincount(nodes, kept_external, minlength=layout.n_nodes))
+    force_error, sway = propagate(layout, held, links, outside)
     pair = 0.0 if equality else _both_sides(layout, lam)
     # an open row moved onto its wall (it penetrates) is held too, with no force of its own
     # closing a bar contact's gap δ moves each end by its share, δ·s/s_end (a wall's node: δ)
@@ -108,39 +121,40 @@ def _pushing(layout: Layout, lam: np.ndarray, pen: np.ndarray, hold: float,
     return lam > np.maximum(-pen, 0.0) * s, (strong, held, s, s_ends)
 
 
-def propagate(layout: Layout, held: np.ndarray, links: np.ndarray, nodes: np.ndarray,
-              external: np.ndarray) -> tuple[float, float]:
+def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
+              outside: np.ndarray) -> tuple[float, float]:
     """What the imbalance of an answer does with the ``held`` nodes (sorted) fixed: (the
     largest force error at a held node, N; the largest displacement error, m).
 
-    r_j, the residual of cut j (element force from u against the outside forces ``external``
-    on the nodes before it), is a load pattern: its jumps are the nodal imbalances. Between
+    r_j, the residual of cut j (element force from u against ``outside``, the running sum of
+    the outside forces over the nodes up to the cut), is a load pattern: its jumps are the nodal imbalances. Between
     two held nodes the exact answer of the imbalanced scene has element forces N_j − (c − r_j)
     ... i.e. its element force errors are c − r_j, with c such that the run's elongation
     errors (c − r_j)/k_j add up to nothing; a run held at one end only (a bar's tail or head)
     has c the cut residual past the bar's free end. The displacement error is the running sum
     of the elongation errors from the held end, and a held node's force error is the jump of c
     across it."""
-    outside = np.cumsum(np.bincount(nodes, external, minlength=layout.n_nodes))
     element, compliance = layout.elements
     if element.size == 0:
         return 0.0, 0.0
     r = (links + outside[:-1])[element]
-    bar = layout.bar_of(element)
     position = _count_at_or_before(layout.n_nodes, held, element)  # held nodes up to the start
-    first, last = layout.bar_ends[0][element], layout.bar_ends[1][element]
-    left_held = (position > 0) & (held[np.maximum(position - 1, 0)] >= first)
-    right_held = (position < held.size) & (held[np.minimum(position, held.size - 1)] <= last)
-    run = position * len(layout.scene.bars) + bar
+    run = position if len(layout.scene.bars) == 1 else (
+        position * len(layout.scene.bars) + layout.bar_of(element))
     starts = np.flatnonzero(np.r_[True, run[1:] != run[:-1]])
     ends = np.r_[starts[1:], run.size]
     size = np.diff(np.r_[starts, run.size])
-    before_bar = np.where(first > 0, outside[np.maximum(first - 1, 0)], 0.0)
-    after_bar = outside[last]
+    # per run: is it held at its left end, at its right end (a held node in its own bar)
+    count = position[starts]
+    first, last = layout.element_bar_ends[0][starts], layout.element_bar_ends[1][starts]
+    left_held = (count > 0) & (held[np.maximum(count - 1, 0)] >= first)
+    right_held = (count < held.size) & (held[np.minimum(count, held.size - 1)] <= last)
     # c per run: weighted mean (held at both ends), the free end's cut residual otherwise
-    both = left_held[starts] & right_held[starts]
+    both = left_held & right_held
     mean = np.add.reduceat(r * compliance, starts) / np.add.reduceat(compliance, starts)
-    c_run = np.where(both, mean, np.where(left_held[starts], after_bar[starts], before_bar[starts]))
+    after_bar = outside[last]
+    before_bar = np.where(first > 0, outside[np.maximum(first - 1, 0)], 0.0)
+    c_run = np.where(both, mean, np.where(left_held, after_bar, before_bar))
     c = np.repeat(c_run, size)
     elongation = (c - r) * compliance
     total = np.cumsum(elongation)
@@ -148,7 +162,7 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray, nodes: np.nda
     from_left = total - base  # displacement of each element's end node, from the left end
     tail_end = np.repeat(total[ends - 1], size)
     from_right = tail_end - total + elongation  # of each element's start node, from the right
-    anchored_left = np.repeat(left_held[starts], size)
+    anchored_left = np.repeat(left_held, size)
     sway = largest(np.where(anchored_left, from_left, from_right))
     # force error at each held node: the jump of c between the elements on either side of it
     # (past a bar's end, the cut residual there)
@@ -166,9 +180,9 @@ def _count_at_or_before(n_nodes: int, held: np.ndarray, nodes: np.ndarray) -> np
     distinct): by one running count over the chain when ``nodes`` are many."""
     if 8 * np.size(nodes) <= n_nodes:
         return np.searchsorted(held, nodes, side="right")
-    mask = np.zeros(n_nodes, dtype=np.intp)
-    mask[held] = 1
-    return np.cumsum(mask)[nodes]
+    mask = np.zeros(n_nodes, dtype=bool)
+    mask[held] = True
+    return count_up_to(mask)[nodes]
 
 
 def _contact_give(layout: Layout, held: np.ndarray, pushing: np.ndarray) -> float:
@@ -241,6 +255,8 @@ def _closing(layout: Layout, moves: tuple[np.ndarray, np.ndarray], row_nodes: np
     held, shift = moves
     if held.size == 0 or not np.isfinite(stand_off).any():
         return 0.0
+    if largest(shift) <= np.min(stand_off):  # no held node moves as far as any open gap
+        return 0.0
     bar = layout.bar_of(row_nodes)
     held_bar = layout.bar_of(held)
     after = _count_at_or_before(layout.n_nodes, held, row_nodes)
@@ -267,6 +283,8 @@ def row_stiffness(layout: Layout, held: np.ndarray, pushing: np.ndarray,
     rows, row_nodes, _, gaps = layout.rows
     node_stiffness = seen_stiffness(layout, held, row_nodes)
     n_walls = len(layout.scene.walls)
+    if n_walls == gaps.size:  # walls only: a row is its node
+        return (node_stiffness, node_stiffness) if ends else node_stiffness
     rigid = np.concatenate((layout.support_nodes, row_nodes[:n_walls][pushing[:n_walls]]))
     fixed = (rows >= n_walls) & in_set(layout.n_nodes, row_nodes, rigid)
     # both ends held: the contact closes only as a wall gives, at that end's own stiffness
@@ -285,15 +303,13 @@ def _both_sides(layout: Layout, lam: np.ndarray) -> float:
     that moves nothing and is wrong in every row it is on (where the gaps leave the nodes one
     position, the rows alone cannot tell how the force splits; the exact answer has one row of
     each loop free of it)."""
-    rows, nodes, coefficients, gaps = layout.rows
     force = np.maximum(lam, 0.0)
-    free = ~in_set(layout.n_nodes, nodes, layout.support_nodes)
-    entries = np.bincount(rows[free], minlength=gaps.size)
-    single = free & (entries[rows] == 1)  # a wall, or a contact with one end held
-    up, down = single & (coefficients > 0), single & (coefficients < 0)
-    plus = np.bincount(nodes[up], force[rows[up]], minlength=layout.n_nodes)
-    minus = np.bincount(nodes[down], force[rows[down]], minlength=layout.n_nodes)
-    common = largest(np.minimum(plus, minus))
+    up_nodes, up_rows, down_nodes, down_rows = layout.opposed_entries
+    common = 0.0
+    if up_nodes.size:
+        plus = np.bincount(up_nodes, force[up_rows], minlength=layout.n_nodes)
+        minus = np.bincount(down_nodes, force[down_rows], minlength=layout.n_nodes)
+        common = largest(np.minimum(plus, minus))
     for cycle in layout.tight_cycles:  # loops through bar contacts (Layout.tight_cycles)
         common = max(common, float(force[list(cycle)].min()))
     return common

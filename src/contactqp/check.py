@@ -132,9 +132,12 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
     finite = all(np.isfinite(a).all() for a in (u, lam, reactions))
     if not finite:  # a NaN or infinite answer: no residual can pass
         return _failed(contact, lam, F, U, tolerances)
-    r_max = section_residual(links, nodes, external)
+    # E_j, the outside forces on nodes 0..j, once for both (where they are many)
+    outside = (np.cumsum(np.bincount(nodes, external, minlength=layout.n_nodes))
+               if 8 * nodes.size > links.size else None)
+    r_max = section_residual(links, nodes, external, outside)
     bounds = error_bounds(layout, u, lam, links, nodes, external, r_max, contact, F, U,
-                          tolerances.complementarity)
+                          tolerances.complementarity, outside)
     residuals = {name: value for name, value in bounds.residuals.items()}
     failures = [
         f"{name} residual {value:.2e} > {getattr(tolerances, name):.0e}"
@@ -179,14 +182,17 @@ def _failed(contact: str, lam: np.ndarray, F: float, U: float,
     return Check(residuals, False, physical, "; ".join(notes), math.inf, math.inf, F, U)
 
 
-def section_residual(forces: np.ndarray, nodes: np.ndarray, external: np.ndarray) -> float:
+def section_residual(forces: np.ndarray, nodes: np.ndarray, external: np.ndarray,
+                     outside: np.ndarray | None = None) -> float:
     """max over the cuts of |N_j + E_j| (N): N_j the force of element j, E_j the outside
     forces on nodes 0..j, and the whole bar's balance |E_last|. E is a step function that
     changes only at loaded nodes, so each run of elements between them is one max and one
     min (numpy reduceat), without an O(n) cumulative sum; with outside forces on more than
-    an eighth of the nodes, one cumulative sum is cheaper than sorting them."""
-    if 8 * nodes.size > forces.size:
-        outside = np.cumsum(np.bincount(nodes, external, minlength=forces.size + 1))
+    an eighth of the nodes, one cumulative sum is cheaper than sorting them (``outside``:
+    that sum, E_j for every node j, when the caller has it)."""
+    if outside is not None or 8 * nodes.size > forces.size:
+        if outside is None:
+            outside = np.cumsum(np.bincount(nodes, external, minlength=forces.size + 1))
         return max(largest(forces + outside[:-1]), abs(float(outside[-1])))
     order = np.argsort(nodes, kind="stable")
     steps, first = np.unique(nodes[order], return_index=True)

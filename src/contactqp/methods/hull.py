@@ -29,7 +29,7 @@ import numpy as np
 from scipy.optimize import isotonic_regression
 
 from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
-from contactqp.model import Model, spread
+from contactqp.model import Model, count_up_to, spread
 from contactqp.result import Solution
 
 
@@ -62,9 +62,8 @@ class WallsOnChain:
         self.n_rows = model.n_contacts
         P = load_factor * layout.nodal_loads
         self.loads = P
-        self.running_load = np.cumsum(P)  # S_j = Σ_(i<=j) P_i over the chain
-        with np.errstate(invalid="ignore"):  # inf × 0 at a junction: never summed over
-            self.compliance_load = self.link_compliance * np.r_[self.running_load[:-1], 0.0]
+        self.running_load = load_factor * layout.running_load  # S_j = Σ_(i<=j) P_i
+        self.compliance_load = load_factor * layout.compliance_load  # c_j S_j per link
         self.bar_first, self.bar_last = layout.bar_ends  # each node's bar's first and last
         self.force_tolerance_base = float(np.abs(P).max(initial=0.0))
         stiffness = float(model.band[0].max()) if model.band.size else 1.0
@@ -128,7 +127,7 @@ class WallsOnChain:
         minorant of its signed gaps (module docstring)."""
         bound, has = self.bound[side], np.isfinite(self.bound[side])
         signed_gap = bound - side * u  # < 0 where passed
-        run = np.cumsum(pinned | self.bar_start)  # a stretch per held node or bar start
+        run = count_up_to(pinned | self.bar_start)  # a stretch per held node or bar start
         adding = np.zeros(self.n, dtype=bool)
         stretch_of = run[passed]
         stretches = stretch_of[np.r_[True, stretch_of[1:] != stretch_of[:-1]]]

@@ -21,6 +21,7 @@ from contactqp.model.layout import (
     ContactRows,
     Layout,
     contact_forces_on_nodes,
+    count_up_to,
     element_forces,
     in_set,
     largest,
@@ -34,7 +35,8 @@ from contactqp.model.layout import (
 
 __all__ = [
     "Condensed", "ContactRows", "Layout", "Model", "build_model", "condense",
-    "contact_forces_on_nodes", "determinate_chain_solve", "displacement_scale",
-    "element_forces", "elongation_rows", "in_set", "largest", "link_forces",
-    "load_force_scale", "node_set", "penetration", "seen_stiffness", "spread", "wall_stiffness", "without_circulation",
+    "contact_forces_on_nodes", "count_up_to", "determinate_chain_solve",
+    "displacement_scale", "element_forces", "elongation_rows", "in_set", "largest",
+    "link_forces", "load_force_scale", "node_set", "penetration", "seen_stiffness", "spread",
+    "wall_stiffness", "without_circulation",
 ]

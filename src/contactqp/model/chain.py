@@ -19,7 +19,7 @@ import scipy.sparse as sp
 
 from contactqp import linalg
 from contactqp.errors import SolverError
-from contactqp.model.layout import Layout, largest, load_force_scale, seen_stiffness
+from contactqp.model.layout import Layout, largest, seen_stiffness
 from contactqp.scene import Scene
 
 if TYPE_CHECKING:
@@ -135,7 +135,7 @@ class Model:
         if press.size:
             stiffness = seen_stiffness(layout, np.zeros(0, dtype=np.intp), layout.rows.node[press])
             pushed_back = float(np.max(-walls[press] * stiffness))
-        scale = max(load_force_scale(layout), pushed_back)
+        scale = max(layout.load_scale, pushed_back)
         if scale > 0.0:
             return scale
         return float(layout.element_stiffness.min()) * self.displacement_scale
@@ -184,9 +184,16 @@ def build_model(scene: Scene | Layout) -> Model:
     sub[supports[supports > 0] - 1] = 0.0
     band[1] = np.delete(sub, supports)
     rows = layout.rows
-    keep = ~np.isin(rows.node, supports)  # a bar contact's supported end contributes nothing
-    columns = rows.node[keep] - np.searchsorted(supports, rows.node[keep])  # free-node numbers
-    C = sp.csr_array((rows.coefficient[keep], (rows.row[keep], columns)),
+    keep = ~layout.support_mask[rows.node]  # a bar contact's supported end contributes nothing
+    column = np.full(n, -1, dtype=np.intp)  # each free node's number among the free ones
+    column[free] = np.arange(free.size)
+    # CSR straight from the entries, put in row order (walls come so; then every bar
+    # contact's node a, then every node b)
+    entries = np.flatnonzero(keep)
+    if layout.scene.contacts:
+        entries = entries[np.argsort(rows.row[entries], kind="stable")]
+    indptr = np.r_[0, np.cumsum(np.bincount(rows.row[entries], minlength=rows.gap.size))]
+    C = sp.csr_array((rows.coefficient[entries], column[rows.node[entries]], indptr),
                      shape=(rows.gap.size, free.size))
     P = np.delete(layout.nodal_loads, supports)
     return Model(layout, free, band, P, C, rows.gap)
@@ -209,7 +216,7 @@ def determinate_chain_solve(compliance: np.ndarray, support: int, rhs: np.ndarra
     """
     rhs = np.asarray(rhs, dtype=float)
     columns = np.ascontiguousarray(np.atleast_2d(rhs.T))  # one row per right-hand side
-    loaded = np.unique(np.concatenate([np.flatnonzero(column) for column in columns]))
+    loaded = np.flatnonzero((columns != 0.0).any(axis=0))  # rows any right-hand side loads
     if loaded.size <= GREEN_ROWS:
         out = np.zeros(columns.shape)
         for row in loaded:

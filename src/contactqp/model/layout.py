@@ -82,6 +82,46 @@ class Layout:
         return _read_only(np.searchsorted(self.elements[0], np.arange(self.n_nodes)))
 
     @cached_property
+    def element_bar_ends(self) -> tuple[np.ndarray, np.ndarray]:
+        """(first node, last node) of the bar of every element (:attr:`elements`)."""
+        element = self.elements[0]
+        return _read_only(self.bar_ends[0][element]), _read_only(self.bar_ends[1][element])
+
+    @cached_property
+    def opposed_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The entries of C that act alone on a free node (a wall, or a bar contact with its
+        other end at a support), at the nodes that have such entries pushing both ways: (nodes
+        and rows pushing in −x, nodes and rows pushing in +x)."""
+        rows, nodes, coefficients, gaps = self.rows
+        free = ~self.support_mask[nodes]
+        single = free & (np.bincount(rows[free], minlength=gaps.size)[rows] == 1)
+        up, down = single & (coefficients > 0), single & (coefficients < 0)
+        both = np.zeros(self.n_nodes, dtype=bool)
+        both[nodes[up]] = True
+        both &= np.bincount(nodes[down], minlength=self.n_nodes) > 0
+        up &= both[nodes]
+        down &= both[nodes]
+        return (_read_only(nodes[up]), _read_only(rows[up]), _read_only(nodes[down]),
+                _read_only(rows[down]))
+
+    @cached_property
+    def running_load(self) -> np.ndarray:
+        """S_j = Σ_(i<=j) P_i, the nodal loads summed over the chain (N)."""
+        return _read_only(np.cumsum(self.nodal_loads))
+
+    @cached_property
+    def compliance_load(self) -> np.ndarray:
+        """1/k of each link times the running load at its start (:attr:`running_load`), 0 past
+        the last node (inf × 0 at a junction is left NaN: never summed over)."""
+        with np.errstate(invalid="ignore"):
+            return _read_only(self.link_compliance * np.r_[self.running_load[:-1], 0.0])
+
+    @cached_property
+    def load_scale(self) -> float:
+        """:func:`load_force_scale`, once per scene."""
+        return load_force_scale(self)
+
+    @cached_property
     def support_mask(self) -> np.ndarray:
         """Whether each global node is held by a support."""
         mask = np.zeros(self.n_nodes, dtype=bool)
@@ -280,17 +320,17 @@ def link_forces(layout: Layout, forces: np.ndarray) -> np.ndarray:
 def contact_forces_on_nodes(layout: Layout, contact_force: np.ndarray) -> np.ndarray:
     """Force of the walls and bar contacts on each node in +x (N): −Cᵀλ in node numbering."""
     rows = layout.rows
-    f = np.zeros(layout.n_nodes)
-    np.add.at(f, rows.node, -rows.coefficient * np.asarray(contact_force, dtype=float)[rows.row])
-    return f
+    return np.bincount(rows.node, -rows.coefficient * np.asarray(contact_force, dtype=float)
+                       [rows.row], minlength=layout.n_nodes)
 
 
 def penetration(layout: Layout, u: np.ndarray) -> np.ndarray:
     """How far each contact is closed past its gap, C u − g: positive = penetrated."""
     rows = layout.rows
-    closed = np.zeros(rows.gap.size)
-    np.add.at(closed, rows.row, rows.coefficient * u[rows.node])
-    return closed - rows.gap
+    if rows.row.size == rows.gap.size:  # walls only: one entry per row, in row order
+        return rows.coefficient * u[rows.node] - rows.gap
+    return np.bincount(rows.row, rows.coefficient * u[rows.node],
+                       minlength=rows.gap.size) - rows.gap
 
 
 def spread(layout: Layout, anchors: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -334,24 +374,42 @@ def seen_stiffness(layout: Layout, held: np.ndarray, nodes: np.ndarray) -> np.nd
     n = layout.n_nodes
     nodes = np.asarray(nodes, dtype=np.intp)
     held = np.asarray(held, dtype=np.intp)
-    if 8 * (nodes.size + held.size) > n:  # many nodes: the nearest fixed ones by scans, O(n)
-        fixed = np.zeros(n, dtype=bool)
-        fixed[layout.support_nodes] = True
-        fixed[held] = True
-        index = np.arange(n)
-        at_or_before = np.maximum.accumulate(np.where(fixed, index, -1))
-        at_or_after = np.minimum.accumulate(np.where(fixed, index, n)[::-1])[::-1]
-        before = np.r_[-1, at_or_before[:-1]][nodes]  # the last fixed node before each
-        after = np.r_[at_or_after[1:], n][nodes]  # the first fixed node after each
-        neighbours = ((before, before >= 0, 1.0), (after, after < n, -1.0))
-    else:
-        fixed = node_set(n, layout.support_nodes, held)
-        left = np.searchsorted(fixed, nodes, side="left") - 1
-        right = np.searchsorted(fixed, nodes, side="right")
-        neighbours = ((fixed[left.clip(0, max(fixed.size - 1, 0))] if fixed.size else left,
-                       left >= 0, 1.0),
-                      (fixed[right.clip(0, max(fixed.size - 1, 0))] if fixed.size else right,
-                       right < fixed.size, -1.0))
+    if 8 * (nodes.size + held.size) <= n:  # few nodes: the nearest fixed ones by bisection
+        return _seen_stiffness_few(layout, held, nodes)
+    fixed = layout.support_mask.copy()
+    fixed[held] = True
+    at = np.flatnonzero(fixed)
+    count = count_up_to(fixed)[nodes]  # fixed nodes at or before each node
+    before = count - fixed[nodes]  # ... strictly before it
+    left = at[np.maximum(before - 1, 0)] if at.size else nodes
+    right = at[np.minimum(count, at.size - 1)] if at.size else nodes
+    has_left, has_right = before > 0, count < at.size
+    if len(layout.scene.bars) > 1:  # the nearest fixed node must be in the node's bar
+        first, last = layout.bar_ends
+        has_left &= left >= first[nodes]
+        has_right &= right <= last[nodes]
+    own = phi[nodes]
+    with np.errstate(divide="ignore"):
+        return (np.where(has_left, 1.0 / (own - phi[left]), 0.0)
+                + np.where(has_right, 1.0 / (phi[right] - own), 0.0))
+
+
+def count_up_to(mask: np.ndarray) -> np.ndarray:
+    """How many of ``mask`` are set at or before each position: a running count in 32-bit
+    integers where it fits (numpy's running sum of booleans into 64 bits is 15× slower)."""
+    return np.cumsum(mask, dtype=np.int32 if mask.size < 2**31 else np.intp)
+
+
+def _seen_stiffness_few(layout: Layout, held: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """:func:`seen_stiffness` for a few ``nodes``: the nearest fixed nodes by bisection."""
+    phi = layout.compliance
+    fixed = node_set(layout.n_nodes, layout.support_nodes, held)
+    left = np.searchsorted(fixed, nodes, side="left") - 1
+    right = np.searchsorted(fixed, nodes, side="right")
+    neighbours = ((fixed[left.clip(0, max(fixed.size - 1, 0))] if fixed.size else left,
+                   left >= 0, 1.0),
+                  (fixed[right.clip(0, max(fixed.size - 1, 0))] if fixed.size else right,
+                   right < fixed.size, -1.0))
     node_bar = layout.bar_of(nodes)
     stiffness = np.zeros(nodes.size)
     for neighbour, near, sign in neighbours:
@@ -377,7 +435,7 @@ def load_force_scale(layout: Layout) -> float:
     loads = layout.nodal_loads
     offsets = layout.node_offsets
     sizes = np.diff(offsets)
-    left = np.cumsum(loads)
+    left = layout.running_load.copy()
     left -= np.repeat(np.r_[0.0, left[offsets[1:-1] - 1]], sizes)  # from each bar's node 0
     right = np.repeat(left[offsets[1:] - 1], sizes) - left
     return max(largest(left), largest(right), largest(loads))
