@@ -19,7 +19,7 @@ import scipy.sparse as sp
 
 from contactqp import linalg
 from contactqp.errors import SolverError
-from contactqp.model.layout import Layout, largest, seen_stiffness
+from contactqp.model.layout import Layout, largest
 from contactqp.scene import Scene
 
 if TYPE_CHECKING:
@@ -129,13 +129,7 @@ class Model:
         with the supports held. In a scene that nothing loads (the answer is u = 0, λ = 0) it
         is the softest element's stiffness times :attr:`displacement_scale`."""
         layout = self.layout
-        walls = self.g[: len(self.scene.walls)]
-        press = np.flatnonzero(walls < 0.0)
-        pushed_back = 0.0
-        if press.size:
-            stiffness = seen_stiffness(layout, np.zeros(0, dtype=np.intp), layout.rows.node[press])
-            pushed_back = float(np.max(-walls[press] * stiffness))
-        scale = max(layout.load_scale, pushed_back)
+        scale = max(layout.load_scale, layout.press_fit_force)
         if scale > 0.0:
             return scale
         return float(layout.element_stiffness.min()) * self.displacement_scale

@@ -122,6 +122,17 @@ class Layout:
         return load_force_scale(self)
 
     @cached_property
+    def press_fit_force(self) -> float:
+        """The largest force that pushes a node back to a wall that starts past it (gap < 0):
+        |gap| × the stiffness the node sees with the supports held (N); 0 without one."""
+        walls = self.rows.gap[: len(self.scene.walls)]
+        press = np.flatnonzero(walls < 0.0)
+        if press.size == 0:
+            return 0.0
+        stiffness = seen_stiffness(self, np.zeros(0, dtype=np.intp), self.rows.node[press])
+        return float(np.max(-walls[press] * stiffness))
+
+    @cached_property
     def support_mask(self) -> np.ndarray:
         """Whether each global node is held by a support."""
         mask = np.zeros(self.n_nodes, dtype=bool)
