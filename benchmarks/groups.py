@@ -9,12 +9,16 @@ a table and writes a JSON file into the output folder; benchmarks/run.py runs th
                passes BUDGET is not run at the larger sizes (recorded with the reason)
     overhead   what the QP method costs on top of the solver it calls: solve(method="qp")
                end to end against Clarabel and OSQP called directly on matrices built
-               beforehand; and a cvxpy re-solve with a new load and gap against its first solve
+               beforehand; a cvxpy re-solve with a new load and gap against its first solve;
+               and start-up (import contactqp, --help, --version) against a process that
+               imports numpy and scipy.sparse
 """
 
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 import time
 from collections.abc import Callable
 from functools import partial
@@ -205,8 +209,39 @@ def cvxpy_rows(scene: contactqp.Scene, repeats: int, solvers: tuple[str, ...]) -
     return rows
 
 
+STARTUP = {  # what is timed, as a fresh process each time
+    "floor: python -c 'import numpy, scipy.sparse'": [sys.executable, "-c",
+                                                     "import numpy, scipy.sparse"],
+    "python -c 'import contactqp'": [sys.executable, "-c", "import contactqp"],
+    "python -m contactqp --help": [sys.executable, "-m", "contactqp", "--help"],
+    "python -m contactqp --version": [sys.executable, "-m", "contactqp", "--version"],
+}
+STARTUP_GOAL = 1.5  # --help within 1.5x of importing numpy and scipy.sparse
+
+
+def startup_rows(repeats: int) -> list[dict]:
+    """Start-up: the median wall time of fresh processes, each as a ratio to the floor (a
+    process that imports numpy and scipy.sparse), measured in the same run."""
+    def run(command: list[str]) -> float:
+        start = time.perf_counter()
+        subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+        return time.perf_counter() - start
+
+    times = {name: sorted(run(command) for _ in range(repeats))[repeats // 2]
+             for name, command in STARTUP.items()}
+    base = next(iter(times.values()))
+    return [{"command": name, "seconds": t, "ratio": t / base,
+             "goal": f"<= {STARTUP_GOAL}" if "--help" in name else ""}
+            for name, t in times.items()]
+
+
 def overhead(quick: bool, out: Path) -> None:
     repeats, elements = (10, 10_000) if quick else (50, 10_000)
+    startup = startup_rows(5 if quick else 15)
+    print(f"{'start-up':40} {'ms':>7} {'/ floor':>8}")
+    for r in startup:
+        print(f"{r['command']:40} {1e3 * r['seconds']:7.0f} {r['ratio']:8.2f} {r['goal']}")
+    print()
     scenes = [contactqp.default_scene(), tapered_scene(elements, "midpoint")]
     overhead = [row for scene in scenes for row in overhead_rows(scene, repeats)]
     resolves = [row for scene in scenes
@@ -222,7 +257,8 @@ def overhead(quick: bool, out: Path) -> None:
               f"{1e3 * r['resolve_s']:11.2f} {r['speedup']:8.1f} "
               f"{1e3 * r['setup_first_s']:14.2f} {1e3 * r['setup_resolve_s']:14.2f} "
               f"{r['setup_speedup']:8.1f}")
-    _write(out, "overhead.json", {"overhead": overhead, "cvxpy_resolve": resolves})
+    _write(out, "overhead.json", {"startup": startup, "overhead": overhead,
+                                  "cvxpy_resolve": resolves})
 
 
 

@@ -268,6 +268,17 @@ def test_help_documents_the_exit_statuses(capsys):
     assert all(f"{code}:" in out for code in (0, 1, 2, 3))
 
 
+def test_version_is_the_packages_version(capsys):
+    """contactqp --version prints the version the package was installed as (its metadata,
+    written from pyproject.toml), exits 0 and solves nothing."""
+    from importlib.metadata import version
+
+    with pytest.raises(SystemExit) as stop:
+        main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.strip() == f"contactqp {version('contactqp')}"
+
+
 def test_what_is_printed_and_written_is_in_the_scenes_units(capsys, tmp_path):
     path = tmp_path / "mm.toml"
     path.write_text(contactqp.scene_to_toml(contactqp.convert_units(DEFAULT_SCENE, "mm-N-MPa")))

@@ -503,3 +503,26 @@ def test_importing_contactqp_loads_no_solver_and_no_matplotlib(code):
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                           timeout=120, check=True)
     assert done.stdout.strip() == ""
+
+
+# imported at the first solve that needs them, not at start-up: scipy.optimize (with
+# scipy.special, ~0.2 s), scipy.linalg and scipy.sparse.linalg (~0.15 s), measured in
+# benchmarks/run.py --cases overhead against python -c "import numpy, scipy.sparse"
+HEAVY_AT_STARTUP = ("scipy.optimize", "scipy.special", "scipy.linalg", "scipy.sparse.linalg",
+                    "scipy.sparse.csgraph")
+
+
+@pytest.mark.parametrize("code", [
+    "import contactqp",
+    ("import contextlib, io, runpy, sys; sys.argv = ['contactqp', '--help']\n"
+     "with contextlib.redirect_stdout(io.StringIO()), contextlib.suppress(SystemExit):\n"
+     "    runpy.run_module('contactqp', run_name='__main__')"),
+])
+def test_starting_contactqp_imports_numpy_and_scipy_sparse_only(code):
+    """Start-up costs what numpy and scipy.sparse cost: the rest of scipy comes with the first
+    solve that uses it (that a solve then works: the test above)."""
+    probe = (f"{code}\nimport sys; print(','.join(sorted(m for m in {HEAVY_AT_STARTUP!r} "
+             "if m in sys.modules)))")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=120, check=True)
+    assert done.stdout.strip() == ""

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from contactqp import __version__
 from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.result import Result
@@ -233,6 +234,7 @@ def parser() -> argparse.ArgumentParser:
                   "default scene, one comparison table and charts.",
                   epilog="exit status: " + "; ".join(f"{code}: {text}"
                                                      for code, text in EXIT_CODES.items()))
+    top.add_argument("--version", action="version", version=f"contactqp {__version__}")
     top.add_argument("--out", default=DEFAULT_OUT, help="folder for charts (default %(default)s)")
     top.add_argument("--no-charts", action="store_true", help="write no PNG files")
     top.set_defaults(handler=command_compare, scene=None)

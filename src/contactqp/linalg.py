@@ -8,14 +8,29 @@ indefinite ones). Anything wider goes to SuperLU.
 
 from __future__ import annotations
 
+from types import ModuleType
+
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from contactqp.errors import SolverError
 
 MAX_BANDWIDTH = 8  # beyond this, SuperLU with a fill-reducing ordering is the better tool
+
+
+def _lapack() -> ModuleType:
+    """scipy.linalg, imported at the first solve rather than with contactqp (0.15 s of the
+    start-up of every command line call otherwise)."""
+    import scipy.linalg
+
+    return scipy.linalg
+
+
+def _sparse_lu() -> ModuleType:
+    """scipy.sparse.linalg (SuperLU), imported when first used: it imports scipy.linalg."""
+    import scipy.sparse.linalg
+
+    return scipy.sparse.linalg
 
 
 def _bandwidths(matrix: sp.coo_array) -> tuple[int, int]:
@@ -42,7 +57,12 @@ def solve_spd_band(band: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         if not band[0, 0] > 0.0:
             raise np.linalg.LinAlgError("1 x 1 matrix is not positive")
         return np.asarray(rhs, dtype=float) / band[0, 0]
-    return sla.solveh_banded(band, rhs, lower=True, check_finite=False)
+    return _lapack().solveh_banded(band, rhs, lower=True, check_finite=False)
+
+
+def symmetric_eigenvalues(matrix: np.ndarray) -> np.ndarray:
+    """The eigenvalues of a dense symmetric matrix, ascending (LAPACK syevr)."""
+    return _lapack().eigvalsh(matrix, check_finite=False)
 
 
 def solve(matrix: sp.sparray, rhs: np.ndarray, *, spd: bool = False,
@@ -67,10 +87,10 @@ def solve(matrix: sp.sparray, rhs: np.ndarray, *, spd: bool = False,
         if max(lower, upper) <= MAX_BANDWIDTH and spd:
             x = solve_spd_band(_band_storage(sp.coo_array(sp.tril(coo)), lower, 0), rhs)
         elif max(lower, upper) <= MAX_BANDWIDTH:
-            x = sla.solve_banded((lower, upper), _band_storage(coo, lower, upper), rhs,
+            x = _lapack().solve_banded((lower, upper), _band_storage(coo, lower, upper), rhs,
                                  check_finite=False)
         else:
-            x = spla.splu(sp.csc_array(coo)).solve(rhs)
+            x = _sparse_lu().splu(sp.csc_array(coo)).solve(rhs)
     except (np.linalg.LinAlgError, RuntimeError) as error:
         kind = "not positive definite" if spd else "singular"
         raise SolverError(f"the linear system is {kind} ({error})") from None

@@ -14,7 +14,6 @@ from dataclasses import replace
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from contactqp import linalg
 from contactqp.methods import hull
@@ -67,6 +66,8 @@ def solve_strain_saddle_point(model: Model, active: np.ndarray) -> tuple[np.ndar
     rows = sp.vstack((sp.hstack((B, -sp.eye_array(m))), sp.hstack((C, sp.csr_array((C.shape[0], m))))))
     matrix = sp.csr_array(sp.block_array([[hessian, rows.T], [rows, None]], format="csr"))
     rhs = np.concatenate((model.P, np.zeros(2 * m), model.g[active]))
+    from scipy.sparse.csgraph import reverse_cuthill_mckee  # imported when first needed
+
     order = reverse_cuthill_mckee(matrix, symmetric_mode=True).astype(int)
     x = linalg.solve(matrix, rhs, order=order)
     return x[:n], x[n + m:n + 2 * m], x[n + 2 * m:]

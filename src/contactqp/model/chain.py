@@ -14,7 +14,6 @@ from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
 from contactqp import linalg
@@ -299,7 +298,7 @@ def wall_stiffness(model: Model | Condensed) -> float | None:
     selector = np.zeros((model.n_free, nodes.size))
     selector[nodes, np.arange(nodes.size)] = 1.0
     S = model.solve_K(selector)[nodes]
-    smallest = float(sla.eigvalsh(0.5 * (S + S.T), check_finite=False)[0])
+    smallest = float(linalg.symmetric_eigenvalues(0.5 * (S + S.T))[0])
     return 1.0 / smallest if smallest > 0.0 else float(np.abs(model.K.diagonal()[nodes]).max())
 
 
