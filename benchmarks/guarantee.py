@@ -76,7 +76,7 @@ def main(scenes: int, seed: int, out: Path | None = None) -> int:
     rng = np.random.default_rng(seed)
     counts: Counter[str] = Counter()
     by_run: dict[str, Counter[str]] = {}
-    beyond = []
+    beyond, failures = [], []
     start = time.perf_counter()
     for index in range(scenes):
         scene = random_scene(rng)
@@ -88,9 +88,11 @@ def main(scenes: int, seed: int, out: Path | None = None) -> int:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     result = contactqp.solve(scene, method, "inequality", formulation, **options)
-            except contactqp.ContactqpError:
+            except contactqp.ContactqpError as error:
                 counts["failed"] += 1
                 by_run.setdefault(label, Counter())["failed"] += 1
+                failures.append({"scene": index, "run": label, "options": options,
+                                 "formulation": formulation, "error": str(error)})
                 continue
             kind, force, displacement = classify(result, exact)
             counts[kind] += 1
@@ -120,6 +122,6 @@ def main(scenes: int, seed: int, out: Path | None = None) -> int:
         with open(out / "guarantee.json", "w", encoding="utf-8") as handle:
             json.dump({"scenes": scenes, "seed": seed, "counts": dict(counts),
                        "by_run": {k: dict(v) for k, v in by_run.items()},
-                       "beyond_bound": beyond}, handle, indent=1)
+                       "beyond_bound": beyond, "failed": failures}, handle, indent=1)
     return 1 if counts["verified, beyond bound"] or counts["verified, wrong"] else 0
 
