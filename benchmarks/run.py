@@ -1,8 +1,8 @@
 """The benchmarks, one entry point: named groups of cases, each measured against a floor from
 the same run (one banded factor-and-solve of K) and, where it has one, an exact reference.
 
-    python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,guarantee] [--quick]
-                             [--out DIR] [--scenes N] [--seed S]
+    python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,loop,guarantee]
+                             [--quick] [--out DIR] [--scenes N] [--seed S]
     python benchmarks/run.py --check DIR       # is a matrix output folder complete? (CI)
 
     matrix     speed against accuracy for every method, solver, formulation, scaling and
@@ -12,7 +12,10 @@ the same run (one banded factor-and-solve of K) and, where it has one, an exact 
     walls      a wall at every node, 10² to 10⁵ contacts (benchmarks/groups.py)
     contacts   iterations and time against 10³ … 10⁶ contacts, every method, three obstacles
                (one-sided, a two-sided channel, a flat patch) (benchmarks/contacts.py)
-    overhead   what the QP method costs on top of a direct solver call (benchmarks/groups.py)
+    overhead   what the QP method costs on top of a direct solver call; start-up
+               (benchmarks/groups.py)
+    loop       the library call in a user's loop: one solve and many load cases of the default
+               scene against hand-written numpy doing the same job (benchmarks/loop.py)
     guarantee  does verified mean right? every method on --scenes random scenes against the
                exact reference (benchmarks/guarantee.py)
 
@@ -29,9 +32,10 @@ from pathlib import Path
 import contacts
 import groups
 import guarantee
+import loop
 import matrix
 
-CASES = ("matrix", "taper", "walls", "contacts", "overhead", "guarantee")
+CASES = ("matrix", "taper", "walls", "contacts", "overhead", "loop", "guarantee")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -62,6 +66,8 @@ def main(argv: list[str] | None = None) -> int:
             matrix.main(args.quick, out / "matrix")
         elif name == "contacts":
             contacts.main(args.quick, out / "contacts")
+        elif name == "loop":
+            loop.main(args.quick, out / "loop")
         elif name == "guarantee":
             scenes = min(args.scenes, 100) if args.quick else args.scenes
             status |= guarantee.main(scenes, args.seed, out / "guarantee")

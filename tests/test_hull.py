@@ -198,15 +198,25 @@ def test_the_option_is_checked():
         contactqp.solve(contactqp.default_scene(), "lagrange", active_set="greedy")
 
 
-def test_auto_condenses_few_contacts_and_keeps_many_on_the_chain():
-    """formulation="auto": the default scene (one contact node) condensed, a wall at every node
-    of 1000 on the full chain (the hull); the same answer as either formulation named."""
-    few = contactqp.solve(contactqp.default_scene())
-    assert few.options.get("formulation") == "condensed"
-    full = contactqp.solve(contactqp.default_scene(), formulation="full")
-    assert abs(few.contact_force[0] - full.contact_force[0]) <= (
-        few.force_error_bound + full.force_error_bound)
-    many = contactqp.solve(contactqp.obstacle(1000))
-    assert "formulation" not in many.options and many.info.get("active_set") == "hull"
-    assert contactqp.solve(contactqp.default_scene(), "qp",
-                           formulation="auto").options.get("formulation") == "condensed"
+def test_auto_condenses_a_long_bar_with_few_contacts_and_nothing_else():
+    """formulation="auto": a 2048-element bar with one wall condensed for the methods that
+    gain by it, and kept on the full chain for Lagrange (its hull active set), for the default
+    scene (4 elements: condensing costs more than it saves) and for a wall at every node;
+    the same answer as either formulation named."""
+    long_bar = contactqp.Scene(
+        contactqp.Bar.tapered_circle(1.0, 2048, 0.040, 0.020, 210e9),
+        (contactqp.Support(0),), (contactqp.Load(1024, 565486.67),),
+        (contactqp.Wall(2048, 1e-4),))
+    for method in ("augmented", "penalty", "qp"):
+        auto = contactqp.solve(long_bar, method)
+        assert auto.options.get("formulation") == "condensed", method
+        full = contactqp.solve(long_bar, method, formulation="full")
+        assert abs(auto.contact_force[0] - full.contact_force[0]) <= (
+            auto.force_error_bound + full.force_error_bound), method
+    lagrange = contactqp.solve(long_bar)
+    assert "formulation" not in lagrange.options and lagrange.info.get("active_set") == "hull"
+    assert lagrange.options == contactqp.solve(long_bar, formulation="full").options
+    for method in ("lagrange", "augmented", "penalty", "qp"):
+        assert "formulation" not in contactqp.solve(contactqp.default_scene(), method).options
+    many = contactqp.solve(contactqp.obstacle(1000), "augmented")
+    assert "formulation" not in many.options

@@ -12,6 +12,7 @@ Also: its settings table, and that no solver prints.
 
 from __future__ import annotations
 
+import itertools
 import warnings
 from pathlib import Path
 
@@ -136,6 +137,18 @@ def test_no_solver_prints_anything(capfd, info):
                                 accuracy=accuracy)
     out, err = capfd.readouterr()
     assert out == "" and err == ""
+
+
+@pytest.mark.parametrize("info", INSTALLED_SOLVERS, ids=[f"{s.backend}-{s.solver}" for s in INSTALLED_SOLVERS])
+def test_no_solver_raises_a_python_warning(info):
+    """Nor a Python warning, which prints on stderr too (ECOS through qpsolvers warns
+    "inaccurate results" on these scenes): what a solver says goes into the status."""
+    for (scene_name, contact), accuracy in itertools.product(CASES, ("default", "high")):
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            contactqp.solve(SCENES[scene_name](), "qp", contact, backend=info.backend,
+                            solver=info.solver, accuracy=accuracy)
+        assert [str(w.message) for w in said] == [], (scene_name, contact, accuracy)
 
 
 def test_verbose_lets_the_solver_talk(capfd):

@@ -15,7 +15,7 @@ import numpy as np
 from contactqp.builders import default_scene
 from contactqp.errors import OptionError
 from contactqp.feasibility import equality_conflict
-from contactqp.methods import Method, checked_options
+from contactqp.methods import Method, checked_options, hull
 from contactqp.model import Condensed, Model, build_model, condense
 from contactqp.result import Result, Solution, make_result
 from contactqp.scene import Scene
@@ -35,6 +35,7 @@ def as_scene(scene: Scene | str | os.PathLike | None) -> Scene:
 
 
 AUTO_CONDENSE = 16  # formulation="auto" condenses a scene with at most this many contact nodes
+AUTO_CONDENSE_NODES = 512  # ... and at least this many free nodes (below, condensing costs more)
 
 
 def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrange",
@@ -53,9 +54,10 @@ def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrang
     default; accuracy "default" or "high"; scale, default True; verbose, default False: see
     :mod:`contactqp.methods.qp`).
 
-    ``formulation``: "auto" (the default: "condensed" where the method takes it and the scene
-    has at most AUTO_CONDENSE contact nodes, else "full"; the same answer, and the Result's
-    options say which ran), "full" (every free node an unknown), "condensed" (K factored once, the
+    ``formulation``: "auto" (the default: "condensed" where the method takes it, the scene
+    has at most AUTO_CONDENSE contact nodes and at least AUTO_CONDENSE_NODES free nodes, and
+    the method is not Lagrange with its hull active set, else "full"; the same answer, and the
+    Result's options say which ran), "full" (every free node an unknown), "condensed" (K factored once, the
     method sees only the nodes that carry contacts, every displacement recovered from the same
     factorisation: :func:`contactqp.model.condense`) or "strain" (lagrange and qp only: the
     element elongations are unknowns too, tied to the displacements by equality rows whose
@@ -70,7 +72,7 @@ def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrang
     start = time.perf_counter()
     model = build_model(scene)
     built = time.perf_counter()
-    formulation = chosen_formulation(model, spec, formulation)
+    formulation = chosen_formulation(model, spec, formulation, contact)
     solution = solve_model(model, spec, contact, formulation, options)
     solved = time.perf_counter()
     options = {**options, "formulation": formulation} if formulation != "full" else options
@@ -78,18 +80,25 @@ def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrang
                        timings={"build": built - start, "solve": solved - built})
 
 
-def chosen_formulation(model: Model, spec: Method, formulation: str) -> str:
+def chosen_formulation(model: Model, spec: Method, formulation: str,
+                       contact: str = "inequality") -> str:
     """The formulation "auto" stands for (:func:`solve`); any other is kept. Condensing costs
-    one solve with K per contact node and leaves the method a dense problem of that size; at a
-    few contact nodes it is the fast path (measured: a 10⁶-element bar with one wall, lagrange
-    0.11 s condensed against 0.16 s full, augmented 0.13 s against 0.89 s)."""
+    one solve with K per contact node and leaves the method a problem in those nodes alone: it
+    pays on a long bar with few contact nodes, and not on a short one, nor for Lagrange where
+    its hull active set applies (statics on the full chain in O(n)). Measured (tapered bar,
+    one wall, median of 5): augmented, penalty and qp reach parity between 256 and 1024
+    elements and are 2.5-20x faster condensed at 16 384; lagrange is 1.2-1.7x faster full at
+    every size from 4 to 10⁶ elements (72 ms against 85 ms at 10⁶)."""
     if formulation != "auto":
         return formulation
     C = model.C
-    if ("condensed" in spec.formulations and 0 < C.nnz <= 2 * AUTO_CONDENSE
-            and np.unique(C.indices).size <= AUTO_CONDENSE):
-        return "condensed"
-    return "full"
+    if ("condensed" not in spec.formulations or model.n_free < AUTO_CONDENSE_NODES
+            or not 0 < C.nnz <= 2 * AUTO_CONDENSE
+            or np.unique(C.indices).size > AUTO_CONDENSE):
+        return "full"
+    if spec.name == "lagrange" and hull.applies(model, contact):
+        return "full"
+    return "condensed"
 
 
 def solve_model(model: Model, spec: Method, contact: str, formulation: str,
@@ -112,4 +121,4 @@ def solve_model(model: Model, spec: Method, contact: str, formulation: str,
                     solution.claimed_success, solution.info)
 
 
-__all__ = ["AUTO_CONDENSE", "as_scene", "chosen_formulation", "solve", "solve_model"]
+__all__ = ["AUTO_CONDENSE", "AUTO_CONDENSE_NODES", "as_scene", "chosen_formulation", "solve", "solve_model"]

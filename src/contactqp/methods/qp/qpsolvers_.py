@@ -8,6 +8,7 @@ KKT condition is P x + q + Gᵀz + Aᵀy = 0. Its Solution says ``found``; that 
 from __future__ import annotations
 
 import time
+import warnings
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -60,14 +61,20 @@ def solve(qp: QPProblem, solver: str, settings: dict[str, Any],
     problem = qpsolvers.Problem(K, qp.q, G=G, h=h, A=A, b=b)
     setup = time.perf_counter()
     options = {**FIXED_SETTINGS.get(solver, {}), **settings}
-    found = qpsolvers.solve_problem(problem, solver=solver, verbose=verbose, **options)
+    with warnings.catch_warnings(record=not verbose) as said:
+        # a solver's warning (ECOS: "inaccurate results") goes into the status, not to stderr:
+        # the library prints nothing unless asked, and the check decides
+        found = qpsolvers.solve_problem(problem, solver=solver, verbose=verbose, **options)
     solved = time.perf_counter()
+    status = _status(found)
+    if said:
+        status += "; " + "; ".join(dict.fromkeys(str(w.message) for w in said))
     # qp.rows() order: ties (in A) then walls (in G for inequality, after the ties in A else)
     dual = np.concatenate((_part(found.y, qp.n_ties), _part(found.z, qp.g.size))) if inequality \
         else found.y
     iterations = _iterations(found.extras or {})
     return QPOutcome(
-        vector_or_nan(found.x, qp.n), vector_or_nan(dual, qp.n_ties + qp.g.size), _status(found),
+        vector_or_nan(found.x, qp.n), vector_or_nan(dual, qp.n_ties + qp.g.size), status,
         claimed_success=bool(found.found), iterations=iterations,
         info={"time_setup": setup - start, "time_solve": solved - setup},
     )
