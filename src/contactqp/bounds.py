@@ -20,6 +20,7 @@ from contactqp.model import (
     largest,
     node_set,
     penetration,
+    run_starts,
     seen_stiffness,
 )
 
@@ -127,11 +128,11 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
     largest force error at a held node, N; the largest displacement error, m).
 
     r_j, the residual of cut j (element force from u against ``outside``, the running sum of
-    the outside forces over the nodes up to the cut), is a load pattern: its jumps are the nodal imbalances. Between
-    two held nodes the exact answer of the imbalanced scene has element forces N_j − (c − r_j)
-    ... i.e. its element force errors are c − r_j, with c such that the run's elongation
-    errors (c − r_j)/k_j add up to nothing; a run held at one end only (a bar's tail or head)
-    has c the cut residual past the bar's free end. The displacement error is the running sum
+    the outside forces over the nodes up to the cut), is a load pattern: its jumps are the
+    nodal imbalances. Between two held nodes the exact answer of the imbalanced scene has
+    element forces N_j − (c − r_j), i.e. its element force errors are c − r_j, with c such
+    that the run's elongation errors (c − r_j)/k_j add up to nothing; a run held at one end
+    only (a bar's tail or head) has c the cut residual past the bar's free end. The displacement error is the running sum
     of the elongation errors from the held end, and a held node's force error is the jump of c
     across it."""
     element, compliance = layout.elements
@@ -141,9 +142,9 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
     position = _count_at_or_before(layout.n_nodes, held, element)  # held nodes up to the start
     run = position if len(layout.scene.bars) == 1 else (
         position * len(layout.scene.bars) + layout.bar_of(element))
-    starts = np.flatnonzero(np.r_[True, run[1:] != run[:-1]])
-    ends = np.r_[starts[1:], run.size]
-    size = np.diff(np.r_[starts, run.size])
+    starts = np.flatnonzero(run_starts(run))
+    ends = np.append(starts[1:], run.size)
+    size = ends - starts
     # per run: is it held at its left end, at its right end (a held node in its own bar)
     count = position[starts]
     first, last = layout.element_bar_ends[0][starts], layout.element_bar_ends[1][starts]
@@ -241,8 +242,9 @@ def gap_moves(layout: Layout, held: np.ndarray, nodes: np.ndarray, delta: np.nda
     same = bar[1:] == bar[:-1]
     with np.errstate(divide="ignore"):
         link = np.where(same, 1.0 / np.diff(layout.compliance[moving]), 0.0)  # 1/c to the next
-    to_left, to_right = np.r_[0.0, link], np.r_[link, 0.0]
-    shifted_left, shifted_right = np.r_[0.0, by_node[:-1]], np.r_[by_node[1:], 0.0]
+    to_left, to_right = np.concatenate(([0.0], link)), np.append(link, 0.0)
+    shifted_left = np.concatenate(([0.0], by_node[:-1]))
+    shifted_right = np.append(by_node[1:], 0.0)
     change = (by_node * (to_left + to_right) + shifted_left * to_left + shifted_right * to_right)
     return largest(change), largest(by_node), (moving, by_node)
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
-from contactqp.model import Model, count_up_to, spread
+from contactqp.model import Model, count_up_to, run_ends, run_starts, spread
 from contactqp.result import Solution
 
 
@@ -78,8 +78,7 @@ class WallsOnChain:
         target = np.where(held[1], self.bound[1], np.where(held[-1], -self.bound[-1], 0.0))
         w_held = self.u_free[nodes] - target[nodes]
         bar = self.bar[nodes]
-        first = np.r_[True, bar[1:] != bar[:-1]]  # each bar's first and last held node
-        last = np.r_[bar[1:] != bar[:-1], True]
+        first, last = run_starts(bar), run_ends(bar)  # each bar's first and last held node
         w = spread(self.model.layout, nodes, w_held)
         u = self.u_free - w
         u[nodes] = target[nodes]  # exactly, not u_free − (u_free − target)
@@ -97,8 +96,8 @@ class WallsOnChain:
         with np.errstate(divide="ignore", invalid="ignore"):
             N_a = (target[b] - target[a] + sum_cS - S[a] * sum_c) / sum_c
         # the element forces just right and just left of every held node
-        right = np.r_[N_a, 0.0]
-        left = np.r_[0.0, N_a - (S[b - 1] - S[a])]
+        right = np.append(N_a, 0.0)
+        left = np.concatenate(([0.0], N_a - (S[b - 1] - S[a])))
         head, tail = self.head_load(nodes[first]), self.tail_load(nodes[last])
         left[first] = head  # − the loads from the bar's start up to the element before
         right[last] = tail  # the loads beyond the node
@@ -129,7 +128,7 @@ class WallsOnChain:
         run = count_up_to(pinned | self.bar_start)  # a stretch per held node or bar start
         adding = np.zeros(self.n, dtype=bool)
         stretch_of = run[passed]
-        stretches = stretch_of[np.r_[True, stretch_of[1:] != stretch_of[:-1]]]
+        stretches = stretch_of[run_starts(stretch_of)]
         begin = np.searchsorted(run, stretches, side="left")
         finish = np.searchsorted(run, stretches, side="right")
         for a, b in zip(begin.tolist(), finish.tolist()):
@@ -140,9 +139,9 @@ class WallsOnChain:
             nodes = inner + np.flatnonzero(has[inner:b])
             x, y = self.phi[nodes], signed_gap[nodes]
             if anchored_left:
-                x, y = np.r_[self.phi[a], x], np.r_[0.0, y]
+                x, y = np.concatenate(([self.phi[a]], x)), np.concatenate(([0.0], y))
             if anchored_right:
-                x, y = np.r_[x, self.phi[b]], np.r_[y, 0.0]
+                x, y = np.append(x, self.phi[b]), np.append(y, 0.0)
             clip = 0 if anchored_left and anchored_right else (-1 if anchored_left else 1)
             vertices = minorant_vertices(x, y, clip)
             vertices -= int(anchored_left)
@@ -170,9 +169,9 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
         slope = np.maximum(slope, 0.0)
     vertices = np.flatnonzero(slope[1:] != slope[:-1]) + 1
     if clip > 0 and slope[0] > 0.0:  # the minorant rises from the first point: its lowest
-        vertices = np.r_[0, vertices]
+        vertices = np.concatenate(([0], vertices))
     if clip < 0 and slope[-1] < 0.0:  # the minorant falls to the last point: its lowest
-        vertices = np.r_[vertices, x.size - 1]
+        vertices = np.append(vertices, x.size - 1)
     return vertices
 
 

@@ -29,6 +29,8 @@ from contactqp.model.layout import (
     load_force_scale,
     node_set,
     penetration,
+    run_ends,
+    run_starts,
     seen_stiffness,
     spread,
 )
@@ -37,6 +39,6 @@ __all__ = [
     "Condensed", "ContactRows", "Layout", "Model", "build_model", "condense",
     "contact_forces_on_nodes", "count_up_to", "determinate_chain_solve",
     "displacement_scale", "element_forces", "elongation_rows", "in_set", "largest",
-    "link_forces", "load_force_scale", "node_set", "penetration", "seen_stiffness", "spread",
-    "wall_stiffness", "without_circulation",
+    "link_forces", "load_force_scale", "node_set", "penetration", "run_ends", "run_starts",
+    "seen_stiffness", "spread", "wall_stiffness", "without_circulation",
 ]

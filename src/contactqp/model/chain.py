@@ -185,7 +185,8 @@ def build_model(scene: Scene | Layout) -> Model:
     entries = np.flatnonzero(keep)
     if layout.scene.contacts:
         entries = entries[np.argsort(rows.row[entries], kind="stable")]
-    indptr = np.r_[0, np.cumsum(np.bincount(rows.row[entries], minlength=rows.gap.size))]
+    indptr = np.concatenate(([0], np.cumsum(np.bincount(rows.row[entries],
+                                                          minlength=rows.gap.size))))
     C = sp.csr_array((rows.coefficient[entries], column[rows.node[entries]], indptr),
                      shape=(rows.gap.size, free.size))
     P = np.delete(layout.nodal_loads, supports)

@@ -129,7 +129,7 @@ def condense(model: Model) -> Condensed:
     band = np.zeros((2, nodes.size))
     band[0] = to_left + to_right
     # a kept node and the next anchor, also kept: the series spring between them couples them
-    adjacent = np.r_[position[1:] == position[:-1] + 1, False]
+    adjacent = np.append(position[1:] == position[:-1] + 1, False)
     band[1] = np.where(adjacent, -to_right, 0.0)
     column = np.full(model.n_free, -1)
     column[nodes] = np.arange(nodes.size)

@@ -114,7 +114,7 @@ class Layout:
         """1/k of each link times the running load at its start (:attr:`running_load`), 0 past
         the last node (inf × 0 at a junction is left NaN: never summed over)."""
         with np.errstate(invalid="ignore"):
-            return _read_only(self.link_compliance * np.r_[self.running_load[:-1], 0.0])
+            return _read_only(self.link_compliance * np.append(self.running_load[:-1], 0.0))
 
     @cached_property
     def load_scale(self) -> float:
@@ -216,7 +216,7 @@ class Layout:
         """1/k of the link from global node j to j + 1 (m/N), inf at a junction, and one 0
         past the last node (for sums between nodes with numpy reduceat)."""
         with np.errstate(divide="ignore"):
-            return _read_only(np.r_[1.0 / self.link_stiffness, 0.0])
+            return _read_only(np.append(1.0 / self.link_stiffness, 0.0))
 
     @cached_property
     def link_stiffness(self) -> np.ndarray:
@@ -352,13 +352,28 @@ def spread(layout: Layout, anchors: np.ndarray, values: np.ndarray) -> np.ndarra
     offsets = layout.node_offsets
     phi = layout.chained_compliance
     bar = layout.bar_of(anchors)
-    first = np.r_[True, bar[1:] != bar[:-1]]
-    last = np.r_[bar[1:] != bar[:-1], True]
+    first, last = run_starts(bar), run_ends(bar)
     xp = np.concatenate((phi[offsets[:-1][bar[first]]], phi[anchors],
                          phi[offsets[1:][bar[last]] - 1]))
     fp = np.concatenate((values[first], values, values[last]))
     order = np.argsort(xp, kind="stable")
     return np.interp(phi, xp[order], fp[order])
+
+
+def run_starts(values: np.ndarray) -> np.ndarray:
+    """Whether each entry starts a run of equal values (the first always does)."""
+    starts = np.empty(values.size, dtype=bool)
+    starts[:1] = True
+    np.not_equal(values[1:], values[:-1], out=starts[1:])
+    return starts
+
+
+def run_ends(values: np.ndarray) -> np.ndarray:
+    """Whether each entry ends a run of equal values (the last always does)."""
+    ends = np.empty(values.size, dtype=bool)
+    ends[-1:] = True
+    np.not_equal(values[1:], values[:-1], out=ends[:-1])
+    return ends
 
 
 def node_set(n_nodes: int, *nodes: np.ndarray) -> np.ndarray:
@@ -447,11 +462,12 @@ def load_force_scale(layout: Layout) -> float:
     offsets = layout.node_offsets
     sizes = np.diff(offsets)
     left = layout.running_load.copy()
-    left -= np.repeat(np.r_[0.0, left[offsets[1:-1] - 1]], sizes)  # from each bar's node 0
+    # from each bar's node 0
+    left -= np.repeat(np.concatenate(([0.0], left[offsets[1:-1] - 1])), sizes)
     right = np.repeat(left[offsets[1:] - 1], sizes) - left
     return max(largest(left), largest(right), largest(loads))
 
 
 __all__ = ["ContactRows", "Layout", "contact_forces_on_nodes", "element_forces", "in_set",
            "largest", "link_forces", "load_force_scale", "node_set", "penetration",
-           "seen_stiffness", "spread"]
+           "run_ends", "run_starts", "seen_stiffness", "spread"]
