@@ -10,7 +10,8 @@ job on the default scene, measured in the same run (issue 15's yardsticks).
                      form (one wall: λ = max(0, (u_free,tip − g) / (K⁻¹)_tip,tip))
 
 contactqp is timed as a user calls it: ``solve(scene, method)`` for one answer (each a checked
-Result), and per case ``solve(scene.scaled_loads(f))`` in a loop. Every contactqp answer is
+Result); per case ``solve(scene.scaled_loads(f))`` in a loop; ``prepare(scene)`` once, then
+``prepared.solve(loads)`` for one case and ``prepared.solve_many(loads)`` for all. Every contactqp answer is
 compared with the hand version's; a mismatch stops the run. Writes loop.json.
 """
 
@@ -94,16 +95,28 @@ def main(quick: bool, out: Path) -> None:
         seconds = median_time(lambda m=method, o=options: contactqp.solve(scene, m, **o), repeats)
         rows.append({"run": f"solve {label(method, options)}", "seconds": seconds,
                      "ratio": seconds / one, "against": "hand script", "goal": "<= 5"})
-    scaled = [scene.scaled_loads(float(f)) for f in factors]
-
-    def library_loop() -> np.ndarray:
-        return np.array([contactqp.solve(s).contact_force[0] for s in scaled])
+    def library_loop() -> np.ndarray:  # as a user writes it: a scene per case, then solve
+        return np.array([contactqp.solve(scene.scaled_loads(float(f))).contact_force[0]
+                         for f in factors])
 
     found = library_loop()
     if not np.allclose(found, exact, rtol=1e-9, atol=1e-9 * FORCE):
         raise SystemExit("the library loop disagrees with the hand version")
     seconds = median_time(library_loop, 3)
     rows.append({"run": f"solve per case, {cases} cases", "seconds": seconds,
+                 "ratio": seconds / vectorised, "against": "hand vectorised", "goal": "<= 2",
+                 "ratio_to_hand_loop": seconds / loop})
+    prepared = contactqp.prepare(scene)
+    one_case = np.array([1.1 * FORCE])
+    seconds = median_time(lambda: prepared.solve(one_case), repeats)
+    rows.append({"run": "prepared.solve, one case", "seconds": seconds, "ratio": seconds / one,
+                 "against": "hand script", "goal": "<= 3"})
+    load_cases = forces[:, None]
+    batch = prepared.solve_many(load_cases)
+    if not np.allclose(batch.contact_force[:, 0], exact, rtol=1e-9, atol=1e-9 * FORCE):
+        raise SystemExit("solve_many disagrees with the hand version")
+    seconds = median_time(lambda: prepared.solve_many(load_cases), 3)
+    rows.append({"run": f"prepared.solve_many, {cases} cases", "seconds": seconds,
                  "ratio": seconds / vectorised, "against": "hand vectorised", "goal": "<= 2",
                  "ratio_to_hand_loop": seconds / loop})
     print(f"{'run':32} {'ms':>10} {'ratio':>8}  against")

@@ -26,6 +26,7 @@ from contactqp.errors import (
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.qp import QPProblem, available_qp_solvers, qp_problem
 from contactqp.model import Layout, Model, build_model
+from contactqp.prepared import Batch, Prepared, prepare
 from contactqp.result import Result
 from contactqp.scene import (
     UNIT_SYSTEMS,
@@ -45,11 +46,11 @@ __version__ = "0.1.0"
 
 __all__ = [
     "CONTACT_KINDS", "FORMULATIONS", "GUARANTEE", "METHODS", "TOLERANCES", "UNIT_SYSTEMS", "Bar",
-    "BarContact", "ContactqpError", "DistributedLoad", "Layout", "Load", "LoadPath", "Model",
-    "OptionError", "QPProblem", "Result", "Scene", "SceneError", "SolverError",
-    "SolverNotAvailable", "Support", "Tolerances", "Units", "Wall", "__version__",
+    "BarContact", "Batch", "ContactqpError", "DistributedLoad", "Layout", "Load", "LoadPath",
+    "Model", "OptionError", "Prepared", "QPProblem", "Result", "Scene", "SceneError",
+    "SolverError", "SolverNotAvailable", "Support", "Tolerances", "Units", "Wall", "__version__",
     "available_qp_solvers", "build_model", "channel", "check", "convert_units",
     "default_scene", "first_contact_factor", "flat_patch", "load_path", "load_scene", "minimal",
-    "obstacle", "qp_problem",
-    "scene_from_dict", "scene_to_toml", "solve", "wall_at_every_node",
+    "obstacle", "prepare", "qp_problem", "scene_from_dict", "scene_to_toml", "solve",
+    "wall_at_every_node",
 ]

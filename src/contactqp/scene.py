@@ -11,15 +11,16 @@ rigid contact would leave undetermined, is refused (contactqp.feasibility).
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from contactqp.errors import SceneError
+from contactqp.errors import OptionError, SceneError
 from contactqp.units import UNIT_SYSTEMS, Units
-from contactqp.values import number, positive_numbers, whole_number
+from contactqp.values import number, positive_numbers, value_array, whole_number
 
 if TYPE_CHECKING:
     from contactqp.model.layout import Layout
@@ -305,6 +306,54 @@ class Scene:
     def with_walls(self, walls: tuple[Wall, ...]) -> Scene:
         """The same scene with other walls."""
         return replace(self, walls=tuple(walls))
+
+    def with_values(self, loads: Any = None, gaps: Any = None) -> Scene:
+        """The same scene with other load values and gaps, everything else kept: ``loads``
+        one per point load (force) then one per distributed load (force per length), in
+        scene order; ``gaps`` one per contact row (the walls, then the bar contacts); in the
+        scene's units; None keeps them. The new scene is checked as any scene is (gaps that
+        leave a node no position are refused); its layout shares every array that does not
+        depend on the values with this scene's (:meth:`Layout.with_values`)."""
+        changes: dict[str, tuple] = {}
+        if loads is not None:
+            n_point = len(self.loads)
+            values = value_array("loads", loads, (n_point + len(self.distributed),),
+                                 "one per point load, then one per distributed load",
+                                 OptionError)
+            changes["loads"] = tuple(replace(p, force=float(f))
+                                     for p, f in zip(self.loads, values[:n_point]))
+            changes["distributed"] = tuple(replace(q, intensity=float(f)) for q, f
+                                           in zip(self.distributed, values[n_point:]))
+        if gaps is not None:
+            n_walls = len(self.walls)
+            values = value_array("gaps", gaps, (self.n_contacts,),
+                                 "one per wall, then one per bar contact", OptionError)
+            negative = np.flatnonzero(values[n_walls:] < 0.0)
+            if negative.size:  # a bar contact's gap is a distance between two bars
+                i = int(negative[0])
+                raise OptionError(f"gaps[{n_walls + i}] (contact[{i}].gap) must be >= 0, got "
+                                  f"{float(values[n_walls + i])!r}")
+            changes["walls"] = tuple(replace(w, gap=float(g))
+                                     for w, g in zip(self.walls, values[:n_walls]))
+            changes["contacts"] = tuple(replace(c, gap=float(g))
+                                        for c, g in zip(self.contacts, values[n_walls:]))
+        if not changes:
+            return self
+        # the bars, supports and where everything sits are this scene's, already checked, and
+        # the values were checked above: only what gaps decide is checked again
+        scene = copy.copy(self)
+        scene.__dict__.pop("layout", None)
+        for name, value in changes.items():
+            object.__setattr__(scene, name, value)
+        if gaps is not None:
+            from contactqp.feasibility import impossible_constraints, indeterminate_contacts
+
+            conflict = impossible_constraints(scene) or indeterminate_contacts(scene)
+            if conflict:
+                raise SceneError(conflict)
+        if "layout" in self.__dict__:
+            scene.__dict__["layout"] = self.layout.with_values(scene)
+        return scene
 
 
 

@@ -106,3 +106,28 @@ def positive_numbers(name: str, values: Any, limit: int) -> np.ndarray:
         in_range(f"{name}[{i}]", float(array[i]))
     array.flags.writeable = False
     return array
+
+
+def value_array(name: str, values: Any, shape: tuple[int, ...], what: str,
+                error: type[ContactqpError]) -> np.ndarray:
+    """``values`` as a float array of ``shape`` (a leading -1: any number of cases), every
+    entry a finite number within range; else ``error`` naming ``name`` and what it holds
+    (``what``: "one per point load, ..."), with the first bad entry."""
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise error(f"{name} must be numbers ({what}), got {values!r}") from None
+    expected = tuple(array.shape[0] if n == -1 and array.ndim else n for n in shape)
+    if array.shape != expected:
+        parts = ["cases" if n == -1 else str(n) for n in shape]
+        wanted = "(" + ", ".join(parts) + ("," if len(parts) == 1 else "") + ")"
+        raise error(f"{name} must have shape {wanted} ({what}), got shape {array.shape}")
+    bad = np.argwhere(~np.isfinite(array))
+    if bad.size:
+        where = ", ".join(map(str, bad[0]))
+        raise error(f"{name}[{where}] must be finite, got {float(array[tuple(bad[0])])!r}")
+    if array.size:
+        for index in (np.unravel_index(np.abs(array).argmax(), array.shape),):
+            in_range(f"{name}[{', '.join(map(str, index))}]", float(array[index]), True, error)
+    return array
+

@@ -51,6 +51,17 @@ class Model:
     def scene(self) -> Scene:
         return self.layout.scene
 
+    def with_layout(self, layout: Layout) -> Model:
+        """This model for a scene that differs only in its load values and gaps (``layout``
+        from :meth:`Layout.with_values`): the numbering, K and C shared, P and g anew."""
+        model = Model(layout, self.free, self.band,
+                      np.delete(layout.nodal_loads, np.sort(layout.support_nodes)), self.C,
+                      layout.rows.gap)
+        for name in ("K", "determinate", "compliance_to_support"):  # K alone, not P or g
+            if name in self.__dict__:
+                model.__dict__[name] = self.__dict__[name]
+        return model
+
     @cached_property
     def K(self) -> sp.csr_array:
         """K as a sparse CSR matrix (made from the band when first asked for)."""

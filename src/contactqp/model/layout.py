@@ -30,6 +30,14 @@ class ContactRows(NamedTuple):
     gap: np.ndarray
 
 
+# The Layout's arrays that depend on the bars, the supports and where the loads and contacts
+# sit, but not on the load values or the gaps: shared by Layout.with_values
+TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_position",
+            "element_bar_ends", "opposed_entries", "support_mask", "junctions",
+            "element_stiffness", "areas", "yield_stress", "compliance", "chained_compliance",
+            "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes")
+
+
 def _read_only(array: np.ndarray) -> np.ndarray:
     array.flags.writeable = False
     return array
@@ -40,6 +48,22 @@ class Layout:
     """The numbering of a scene's nodes and the arrays along it (module docstring)."""
 
     scene: Scene
+
+    def with_values(self, scene: Scene) -> Layout:
+        """The layout of ``scene``, which differs from this one's only in its load values and
+        gaps (:meth:`Scene.with_values`): every array that does not depend on them
+        (:data:`TOPOLOGY`, and the contact rows but their gaps) is shared, not made again."""
+        layout = Layout(scene)
+        for name in TOPOLOGY:
+            if name in self.__dict__:
+                layout.__dict__[name] = self.__dict__[name]
+        if "rows" in self.__dict__:
+            rows = self.rows
+            gaps = np.fromiter((w.gap for w in scene.walls), float, len(scene.walls))
+            if scene.contacts:
+                gaps = np.concatenate((gaps, [c.gap for c in scene.contacts]))
+            layout.__dict__["rows"] = rows._replace(gap=_read_only(gaps))
+        return layout
 
     @cached_property
     def node_offsets(self) -> np.ndarray:

@@ -1,0 +1,169 @@
+"""A scene prepared once and solved for many load cases and gaps.
+
+:func:`prepare` checks the method's options, lays the scene out and builds its model (K, C, the
+numbering) once; :meth:`Prepared.solve` then takes new load values and gaps and returns a
+checked :class:`~contactqp.result.Result` as :func:`contactqp.solve` would for the scene with
+those values, sharing everything that does not depend on them (:meth:`Scene.with_values`,
+:meth:`Layout.with_values`, :meth:`Model.with_layout`). :meth:`Prepared.solve_many` solves a
+batch of cases and returns them as a :class:`Batch` of arrays, every case checked.
+
+Each case is solved and checked on its own (the batch is a loop over the cases); solving all
+cases at once (one factorisation, many right-hand sides, the check vectorised) is not done yet.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from contactqp.errors import OptionError
+from contactqp.feasibility import equality_conflict
+from contactqp.methods import Method, checked_options
+from contactqp.model import Model, build_model
+from contactqp.result import Result, make_result
+from contactqp.scene import Scene
+from contactqp.solve import as_scene, chosen_formulation, solve_model
+from contactqp.values import value_array
+
+
+@dataclass(frozen=True, eq=False)
+class Prepared:
+    """A scene, a method and its options, prepared for many solves (module docstring).
+
+    Attributes
+    ----------
+    scene : the scene as prepared (its loads and gaps are the default values).
+    method, contact, options : as given to :func:`prepare` (options checked).
+    formulation : the formulation every solve uses ("auto" resolved on the scene).
+    model : the scene's model, whose K, C and numbering every solve shares.
+    """
+
+    scene: Scene
+    method: str
+    contact: str
+    formulation: str
+    options: dict[str, Any]
+    model: Model
+    spec: Method = field(repr=False)
+
+    @property
+    def n_loads(self) -> int:
+        """Load values a case gives: one per point load, then one per distributed load."""
+        return len(self.scene.loads) + len(self.scene.distributed)
+
+    @property
+    def n_gaps(self) -> int:
+        """Gaps a case gives: one per wall, then one per bar contact."""
+        return self.scene.n_contacts
+
+    def solve(self, loads: Any = None, gaps: Any = None) -> Result:
+        """The checked Result of the prepared scene with these load values and gaps (None:
+        the scene's own), as :func:`contactqp.solve` gives it for that scene."""
+        start = time.perf_counter()
+        scene = self.scene.with_values(loads, gaps)
+        if self.contact == "equality" and gaps is not None:
+            conflict = equality_conflict(scene)
+            if conflict:
+                raise OptionError(conflict)
+        model = self.model if scene is self.scene else self.model.with_layout(scene.layout)
+        built = time.perf_counter()
+        solution = solve_model(model, self.spec, self.contact, self.formulation, self.options)
+        solved = time.perf_counter()
+        options = (self.options if self.formulation == "full"
+                   else {**self.options, "formulation": self.formulation})
+        return make_result(model, solution, method=self.method, contact=self.contact,
+                           options=options,
+                           timings={"build": built - start, "solve": solved - built})
+
+    def solve_many(self, loads: Any = None, gaps: Any = None) -> Batch:
+        """Every case of ``loads`` (cases x :attr:`n_loads`) and ``gaps`` (cases x
+        :attr:`n_gaps`), either None for the scene's own values; each solved and checked."""
+        load_cases = None if loads is None else value_array(
+            "loads", loads, (-1, self.n_loads),
+            "a row per case: one per point load, then one per distributed load", OptionError)
+        gap_cases = None if gaps is None else value_array(
+            "gaps", gaps, (-1, self.n_gaps),
+            "a row per case: one per wall, then one per bar contact", OptionError)
+        sizes = {len(a) for a in (load_cases, gap_cases) if a is not None}
+        if len(sizes) > 1:
+            raise OptionError(f"loads and gaps must have as many cases (rows), got "
+                              f"{len(load_cases)} and {len(gap_cases)}")
+        cases = sizes.pop() if sizes else 1
+        return Batch(tuple(
+            self.solve(None if load_cases is None else load_cases[i],
+                       None if gap_cases is None else gap_cases[i])
+            for i in range(cases)))
+
+
+@dataclass(frozen=True, eq=False)
+class Batch:
+    """The Results of many cases (:meth:`Prepared.solve_many`), with their quantities as
+    arrays, one row per case; ``batch[i]`` is case i's Result."""
+
+    results: tuple[Result, ...]
+
+    def __len__(self) -> int:
+        return len(self.results)
+
+    def __getitem__(self, case: int) -> Result:
+        return self.results[case]
+
+    def _stack(self, name: str) -> np.ndarray:
+        return np.array([getattr(result, name) for result in self.results])
+
+    @cached_property
+    def contact_force(self) -> np.ndarray:
+        """cases x contact rows (force)."""
+        return self._stack("contact_force")
+
+    @cached_property
+    def u(self) -> np.ndarray:
+        """cases x nodes (displacement)."""
+        return self._stack("u")
+
+    @cached_property
+    def reactions(self) -> np.ndarray:
+        """cases x supports (force)."""
+        return self._stack("reactions")
+
+    @cached_property
+    def penetration(self) -> np.ndarray:
+        """cases x contact rows (length; > 0: past the wall)."""
+        return self._stack("penetration")
+
+    @cached_property
+    def verified(self) -> np.ndarray:
+        """Whether each case passed its check."""
+        return self._stack("verified").astype(bool)
+
+    @cached_property
+    def residuals(self) -> dict[str, np.ndarray]:
+        """Each residual of the check (contactqp.check), one per case (NaN where a contact
+        kind has none)."""
+        names = self.results[0].residuals if self.results else {}
+        return {name: np.array([np.nan if r.residuals[name] is None else r.residuals[name]
+                                for r in self.results]) for name in names}
+
+
+def prepare(scene: Scene | str | None = None, method: str = "lagrange",
+            contact: str = "inequality", formulation: str = "auto",
+            **options: Any) -> Prepared:
+    """Prepare ``scene`` (a Scene, a scene file's path or None for the default scene) for many
+    solves by ``method`` with ``contact`` and ``options`` as :func:`contactqp.solve` takes
+    them: the options are checked, the scene laid out and its model built once."""
+    scene = as_scene(scene)
+    spec, options = checked_options(method, contact, formulation, options)
+    if contact == "equality":
+        conflict = equality_conflict(scene)
+        if conflict:
+            raise OptionError(conflict)
+    model = build_model(scene)
+    return Prepared(scene, method, contact, chosen_formulation(model, spec, formulation, contact),
+                    options, model, spec)
+
+
+__all__ = ["Batch", "Prepared", "prepare"]

@@ -1,0 +1,184 @@
+"""contactqp.prepare: a scene prepared once, solved for other load values and gaps.
+
+Every expected answer is a fresh contactqp.solve of the scene built anew with the same values
+(not through Scene.with_values, the code under test), or the closed form of the default scene.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import contactqp
+from closed_forms import (
+    DEFAULT_F,
+    DEFAULT_GAP,
+    DEFAULT_LENGTHS,
+    EXAMPLES,
+    INSTALLED_SOLVERS,
+    SCENES,
+    cantilever,
+    default_areas,
+)
+from contactqp import Load, Wall
+
+RUNS = [("lagrange", {}), ("penalty", {}), ("augmented", {}),
+        ("qp", {"backend": "clarabel"}), ("qp", {"backend": "osqp"}),
+        ("qp", {"backend": "cvxpy"})]
+RUN_IDS = ["/".join([m, *o.values()]) for m, o in RUNS]
+
+
+def rebuilt(scene: contactqp.Scene, loads: np.ndarray, gaps: np.ndarray) -> contactqp.Scene:
+    """The scene with these values, built from its parts (independently of with_values)."""
+    n_point, n_walls = len(scene.loads), len(scene.walls)
+    return contactqp.Scene(
+        scene.bars, scene.supports,
+        tuple(replace(p, force=float(f)) for p, f in zip(scene.loads, loads[:n_point])),
+        tuple(replace(w, gap=float(g)) for w, g in zip(scene.walls, gaps[:n_walls])),
+        name=scene.name,
+        distributed=tuple(replace(q, intensity=float(f))
+                          for q, f in zip(scene.distributed, loads[n_point:])),
+        contacts=tuple(replace(c, gap=float(g)) for c, g in zip(scene.contacts, gaps[n_walls:])),
+        units=scene.units)
+
+
+def values(scene: contactqp.Scene) -> tuple[np.ndarray, np.ndarray]:
+    loads = np.array([p.force for p in scene.loads] + [q.intensity for q in scene.distributed])
+    gaps = np.array([w.gap for w in scene.walls] + [c.gap for c in scene.contacts])
+    return loads, gaps
+
+
+def assert_same(result: contactqp.Result, fresh: contactqp.Result) -> None:
+    """The same answer to round-off: the same method on the same numbers."""
+    scale = max(fresh.force_scale, float(np.abs(fresh.contact_force).max(initial=0.0)))
+    np.testing.assert_allclose(result.contact_force, fresh.contact_force, rtol=0,
+                               atol=1e-12 * scale)
+    np.testing.assert_allclose(result.u, fresh.u, rtol=0,
+                               atol=1e-12 * max(fresh.displacement_scale, np.abs(fresh.u).max()))
+    assert result.verified == fresh.verified
+    assert result.options == fresh.options
+
+
+SCENE_FILES = [pytest.param(path, id=path.stem) for path in EXAMPLES]
+
+
+@pytest.mark.parametrize(("method", "options"), RUNS, ids=RUN_IDS)
+@pytest.mark.parametrize("name", sorted(SCENES))
+def test_a_prepared_solve_is_a_fresh_solve_of_the_scene_with_those_values(name, method,
+                                                                         options):
+    scene = SCENES[name]()
+    prepared = contactqp.prepare(scene, method, **options)
+    rng = np.random.default_rng(7)
+    loads, gaps = values(scene)
+    for _ in range(3):
+        new_loads = loads * rng.uniform(0.2, 1.8, loads.size)
+        new_gaps = gaps * rng.uniform(0.5, 2.0, gaps.size)
+        fresh = contactqp.solve(rebuilt(scene, new_loads, new_gaps), method, **options)
+        assert_same(prepared.solve(new_loads, new_gaps), fresh)
+    assert_same(prepared.solve(), contactqp.solve(scene, method, **options))
+
+
+@pytest.mark.parametrize("path", SCENE_FILES)
+def test_every_example_scene_can_be_prepared(path):
+    """Distributed loads, bar contacts, several bars, mm units: the values in scene order."""
+    scene = contactqp.load_scene(path)
+    prepared = contactqp.prepare(scene)
+    loads, gaps = values(scene)
+    new_loads, new_gaps = 1.3 * loads, 0.8 * gaps
+    assert_same(prepared.solve(new_loads, new_gaps),
+                contactqp.solve(rebuilt(scene, new_loads, new_gaps)))
+
+
+@pytest.mark.parametrize("info", INSTALLED_SOLVERS,
+                         ids=[f"{s.backend}-{s.solver}" for s in INSTALLED_SOLVERS])
+def test_every_installed_qp_solver_re_solves_as_it_solves(info):
+    scene = SCENES["several_walls"]()
+    loads, gaps = values(scene)
+    prepared = contactqp.prepare(scene, "qp", backend=info.backend, solver=info.solver)
+    fresh = contactqp.solve(rebuilt(scene, 0.7 * loads, 1.2 * gaps), "qp",
+                            backend=info.backend, solver=info.solver)
+    assert_same(prepared.solve(0.7 * loads, 1.2 * gaps), fresh)
+
+
+def test_a_batch_is_its_cases_and_each_case_its_own_active_set():
+    """Loads from 0 to 2F on the default scene: the small ones leave the gap open, the large
+    ones close it; every case's force is the closed form max(0, (F f₂ − g) / f₄)."""
+    forces = np.linspace(0.0, 2.0 * DEFAULT_F, 9)
+    gaps = np.linspace(0.5, 1.5, 9) * DEFAULT_GAP
+    batch = contactqp.prepare().solve_many(forces[:, None], gaps[:, None])
+    expected = [cantilever(DEFAULT_LENGTHS, default_areas("midpoint"), 210e9, [(2, f)],
+                           (4, g, "+"))[1] for f, g in zip(forces, gaps)]
+    assert len(batch) == 9 and batch.contact_force.shape == (9, 1)
+    np.testing.assert_allclose(batch.contact_force[:, 0], expected, rtol=1e-12,
+                               atol=1e-9 * DEFAULT_F)
+    assert (batch.contact_force == 0.0).any() and (batch.contact_force > 0.0).any()
+    assert batch.verified.all() and batch.u.shape == (9, 5) and batch.reactions.shape == (9, 1)
+    assert batch.penetration.shape == (9, 1) and batch.residuals["force"].shape == (9,)
+    assert batch[3].contact_force[0] == batch.contact_force[3, 0]
+
+
+def test_a_batch_of_equality_contact_has_no_complementarity_residual():
+    batch = contactqp.prepare(contact="equality").solve_many(gaps=[[1e-4], [2e-3]])
+    assert np.isnan(batch.residuals["complementarity"]).all()
+    assert (batch.contact_force[1] < 0.0).all()  # the far wall pulls the tip out to it
+
+
+def test_the_layout_shares_what_the_values_leave_alone():
+    scene = contactqp.default_scene()
+    layout = scene.layout
+    layout.rows, layout.element_stiffness, layout.nodal_loads  # noqa: B018 (made)
+    other = scene.with_values([2.0e5], [3e-4])
+    assert other.layout.element_stiffness is layout.element_stiffness
+    assert other.layout.rows.node is layout.rows.node
+    assert other.layout.rows.gap.tolist() == [3e-4]
+    assert other.layout.nodal_loads.tolist() == [0.0, 0.0, 2.0e5, 0.0, 0.0]
+    assert scene.walls[0].gap == DEFAULT_GAP and scene.loads[0].force == DEFAULT_F
+
+
+@pytest.mark.parametrize(("arguments", "message"), [
+    ({"loads": [1.0, 2.0]}, r"loads must have shape \(1,\) \(one per point load"),
+    ({"loads": [float("nan")]}, r"loads\[0\] must be finite, got nan"),
+    ({"gaps": ["near"]}, "gaps must be numbers"),
+    ({"gaps": [float("inf")]}, r"gaps\[0\] must be finite, got inf"),
+])
+def test_bad_values_are_one_clear_error_naming_the_argument(arguments, message):
+    with pytest.raises(contactqp.OptionError, match=message):
+        contactqp.prepare().solve(**arguments)
+
+
+@pytest.mark.parametrize(("arguments", "message"), [
+    ({"loads": [1.0, 2.0]}, r"loads must have shape \(cases, 1\)"),
+    ({"loads": [[1.0], [float("nan")]]}, r"loads\[1, 0\] must be finite, got nan"),
+    ({"loads": [[1.0], [2.0]], "gaps": [[1e-4]]}, "as many cases"),
+])
+def test_bad_batches_are_one_clear_error_naming_the_argument(arguments, message):
+    with pytest.raises(contactqp.OptionError, match=message):
+        contactqp.prepare().solve_many(**arguments)
+
+
+def test_a_bar_contact_gap_may_not_be_negative():
+    scene = next(contactqp.load_scene(p) for p in EXAMPLES
+                 if contactqp.load_scene(p).contacts)
+    _, gaps = values(scene)
+    gaps[len(scene.walls)] = -1e-6
+    with pytest.raises(contactqp.OptionError, match=rf"gaps\[{len(scene.walls)}\] "
+                       r"\(contact\[0\]\.gap\) must be >= 0"):
+        contactqp.prepare(scene).solve(gaps=gaps)
+
+
+def test_gaps_that_leave_a_node_no_position_are_refused():
+    """Walls on both sides of a node, 0.1 mm apart, then overlapping: refused, not solved."""
+    bar = contactqp.Bar.from_areas([1e-4, 1e-4], 2e11, length=2.0)
+    scene = contactqp.Scene(bar, (contactqp.Support(0),), (Load(1, 1e3),),
+                            (Wall(1, 1e-4, "+"), Wall(1, 0.0, "-")))
+    prepared = contactqp.prepare(scene)
+    assert prepared.solve(gaps=[2e-4, 0.0]).verified
+    with pytest.raises(contactqp.SceneError):
+        prepared.solve(gaps=[-2e-4, 1e-4])
+
+
+def test_options_are_checked_once_when_prepared():
+    with pytest.raises(contactqp.OptionError, match="penalty"):
+        contactqp.prepare(method="penalty", penalty=-1.0)
