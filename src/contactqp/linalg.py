@@ -88,7 +88,7 @@ def solve(matrix: sp.sparray, rhs: np.ndarray, *, spd: bool = False,
             x = solve_spd_band(_band_storage(sp.coo_array(sp.tril(coo)), lower, 0), rhs)
         elif max(lower, upper) <= MAX_BANDWIDTH:
             x = _lapack().solve_banded((lower, upper), _band_storage(coo, lower, upper), rhs,
-                                 check_finite=False)
+                                       check_finite=False)
         else:
             x = _sparse_lu().splu(sp.csc_array(coo)).solve(rhs)
     except (np.linalg.LinAlgError, RuntimeError) as error:

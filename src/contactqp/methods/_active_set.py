@@ -24,6 +24,10 @@ def displacement_tolerance(u: np.ndarray, g: np.ndarray, P: np.ndarray, K) -> fl
                                np.abs(P).max(initial=0.0) / K.diagonal().max())
 
 
+class ActiveSetCycle(SolverError):
+    """The active-set loop came back to a set it had left."""
+
+
 def default_max_iterations(n_rows: int) -> int:
     return 50 + 2 * n_rows
 
@@ -49,7 +53,7 @@ def active_set_loop(n_rows: int, step: Step, update: Update, *, method: str,
             return u, lam, iteration
         key = following.tobytes()
         if key in seen:
-            raise SolverError(
+            raise ActiveSetCycle(
                 f"{method}: the active-set loop cycles (walls in contact "
                 f"{np.flatnonzero(following).tolist()} came back after {iteration} steps)"
             )

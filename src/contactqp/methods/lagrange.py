@@ -6,6 +6,9 @@ passed walls are added: "passed" every one (the textbook loop: its steps grow wi
 as a contact patch is crossed a few nodes per step), "hull" (the default) the vertices of
 convex hulls, with each step solved by statics in O(n) (:mod:`contactqp.methods.hull`), where
 the contacts are walls alone on the full formulation; elsewhere "hull" is the textbook loop.
+A textbook loop that comes back to a set it left (dependent rows: zero gaps closing a loop of
+walls and bar contacts) hands over to Lemke's method (:mod:`contactqp.methods.lemke`) on the
+same contact problem, up to LEMKE_LIMIT rows.
 """
 
 from __future__ import annotations
@@ -17,8 +20,20 @@ import scipy.sparse as sp
 
 from contactqp import linalg
 from contactqp.methods import hull
-from contactqp.methods._active_set import DECISION_RTOL, active_set_loop, displacement_tolerance
-from contactqp.model import Condensed, Model, elongation_rows
+from contactqp.methods._active_set import (
+    DECISION_RTOL,
+    ActiveSetCycle,
+    active_set_loop,
+    displacement_tolerance,
+)
+from contactqp.methods.lemke import lemke
+from contactqp.model import (
+    Condensed,
+    Model,
+    element_forces,
+    elongation_rows,
+    without_circulation,
+)
 from contactqp.result import Solution
 
 
@@ -176,10 +191,36 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
                 solution = replace(solution, u_free=solution.u_free[model.nodes])
             return solution
         info = {"active_set": "hull, then passed (the hull's set came back)"}
-    u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="lagrange",
-                                         max_iterations=max_iterations, start=start)
+    try:
+        u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="lagrange",
+                                             max_iterations=max_iterations, start=start)
+    except ActiveSetCycle as cycle:
+        # degenerate rows (zero gaps closing a loop of walls and bar contacts) can make the
+        # loop come back; Lemke's method on the same contact problem cannot cycle
+        if model.n_contacts > LEMKE_LIMIT:
+            raise
+        u, lam, iterations = _by_lemke(model)
+        info = {"active_set": f"passed, then Lemke's method ({cycle})"}
+        if formulation == "strain":  # the element forces from u, as the tie rows give them
+            element_force[:] = [element_forces(model.layout, model.full_displacements(u))]
     return Solution(u, lam, solver="lagrange", iterations=iterations,
                     info=info | _strain_info(element_force))
+
+
+LEMKE_LIMIT = 500  # contact rows up to which a cycling loop hands over to Lemke's method
+
+
+def _by_lemke(model: Model | Condensed) -> tuple[np.ndarray, np.ndarray, int]:
+    """(u, λ, pivots): the contact forces by Lemke's method on W λ + q >= 0, λ >= 0,
+    complementary (:mod:`contactqp.methods.lemke`), W = C K⁻¹ Cᵀ and q = g − C K⁻¹P; then
+    u = K⁻¹(P − Cᵀλ), with any force carried round a loop of rows taken out
+    (:func:`contactqp.model.without_circulation`)."""
+    C = model.C
+    columns = linalg.solve(model.K, np.column_stack((model.P, C.T.toarray())), spd=True)
+    u_free, flexibility = columns[:, 0], columns[:, 1:]
+    lam, pivots = lemke(C @ flexibility, model.g - C @ u_free)
+    lam = without_circulation(model, lam)
+    return u_free - flexibility @ lam, lam, pivots
 
 
 def _strain_info(element_force: list[np.ndarray]) -> dict:
