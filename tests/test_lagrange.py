@@ -445,3 +445,129 @@ def test_a_cycling_active_set_hands_over_to_lemke_and_is_right(name, formulation
     exact = reference(scene)
     assert np.abs(result.contact_force - exact.contact_force).max() <= 1e-12 * result.force_scale
     assert np.abs(result.u - exact.displacement).max() <= 1e-12 * result.displacement_scale
+
+
+# A scene of the random family (seed 2026, scene 631) on which the loop settles on a set that
+# leaves a wall passed: the row that would hold it depends on rows already held
+SETTLED_PASSED = """
+name = "scene"
+units = "SI"
+
+[[bar]]
+areas = [0.22887079924674733, 0.056484722824039324, 8.04014345469624e-06, 0.008739082787067082, 0.00017075932630454863, 1.0330775011274484e-05]
+lengths = [0.1477755266917365, 0.1558129911450877, 0.06979562923038451, 0.2363284087921522, 0.855073737447604, 0.07117762311242538]
+
+[bar.material]
+youngs_modulus = 4497303062.1543665
+
+[[bar]]
+areas = [0.00040396894826021074, 0.00041590432730578396, 0.6362673538366711]
+lengths = [0.15790532851188965, 0.25314296679693055, 0.13276935937807727]
+
+[bar.material]
+youngs_modulus = 662757468243.939
+
+[[bar]]
+areas = [0.04404828943857155, 0.007346062502168844, 2.7477740597441995e-06, 0.000295709773006797, 2.8489225480434045e-07, 1.0]
+lengths = [0.15014603890371525, 0.013578914320270906, 0.02596446368952993, 0.0972327919218874, 0.777916666739439, 0.0392809877487751]
+
+[bar.material]
+youngs_modulus = 443971439689.8842
+
+[[support]]
+bar = 0
+node = 0
+
+[[support]]
+bar = 1
+node = 0
+
+[[support]]
+bar = 2
+node = 0
+
+[[load]]
+bar = 1
+node = 2
+force = 2110.1533912313757
+
+[[distributed_load]]
+bar = 2
+intensity = -170967.96343180252
+start = 0
+
+[[wall]]
+bar = 0
+node = 3
+gap = 0.0
+side = "+"
+
+[[wall]]
+bar = 0
+node = 3
+gap = 0.006019709061829061
+side = "-"
+
+[[wall]]
+bar = 0
+node = 4
+gap = 0.7984183144991903
+side = "-"
+
+[[wall]]
+bar = 1
+node = 1
+gap = 0.0
+side = "+"
+
+[[wall]]
+bar = 1
+node = 1
+gap = 0.1802307513764362
+side = "-"
+
+[[wall]]
+bar = 1
+node = 2
+gap = 0.0
+side = "-"
+
+[[wall]]
+bar = 2
+node = 1
+gap = 0.004593335440989482
+side = "-"
+
+[[wall]]
+bar = 2
+node = 2
+gap = 0.0
+side = "+"
+
+[[wall]]
+bar = 2
+node = 2
+gap = 0.0
+side = "-"
+
+[[wall]]
+bar = 2
+node = 3
+gap = 0.00016424461483302544
+side = "+"
+
+[[contact]]
+bar_a = 0
+node_a = 3
+bar_b = 2
+node_b = 2
+gap = 0.5988276092429249
+"""
+
+
+def test_a_set_that_settles_with_a_wall_passed_hands_over_to_lemke():
+    scene = contactqp.scene_from_dict(tomllib.loads(SETTLED_PASSED))
+    result = contactqp.solve(scene, "lagrange", formulation="full")
+    assert "still passed" in result.info["active_set"] and result.verified
+    exact = reference(scene)
+    assert np.abs(result.contact_force - exact.contact_force).max() <= 1e-9 * result.force_scale

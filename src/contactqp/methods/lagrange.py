@@ -191,16 +191,22 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
                 solution = replace(solution, u_free=solution.u_free[model.nodes])
             return solution
         info = {"active_set": "hull, then passed (the hull's set came back)"}
+    reason = None
     try:
         u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="lagrange",
                                              max_iterations=max_iterations, start=start)
-    except ActiveSetCycle as cycle:
-        # degenerate rows (zero gaps closing a loop of walls and bar contacts) can make the
-        # loop come back; Lemke's method on the same contact problem cannot cycle
+        # a set can settle with a wall still passed: a dependent row (zero gaps closing a
+        # loop of walls and bar contacts) is never added (independent_rows)
+        if (C @ u - g > displacement_tolerance(u, g, P, model.K)).any():
+            reason = "the loop settled with a wall still passed"
+    except ActiveSetCycle as cycle:  # the same dependent rows can make the loop come back
         if model.n_contacts > LEMKE_LIMIT:
             raise
+        reason = str(cycle)
+    if reason is not None and model.n_contacts <= LEMKE_LIMIT:
+        # Lemke's method on the same contact problem: finite, and it cannot cycle
         u, lam, iterations = _by_lemke(model)
-        info = {"active_set": f"passed, then Lemke's method ({cycle})"}
+        info = {"active_set": f"passed, then Lemke's method ({reason})"}
         if formulation == "strain":  # the element forces from u, as the tie rows give them
             element_force[:] = [element_forces(model.layout, model.full_displacements(u))]
     return Solution(u, lam, solver="lagrange", iterations=iterations,
