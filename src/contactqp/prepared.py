@@ -22,11 +22,11 @@ import numpy as np
 
 from contactqp.errors import OptionError
 from contactqp.feasibility import equality_conflict
-from contactqp.methods import Method, checked_options
+from contactqp.methods import Method
 from contactqp.model import Model, build_model
 from contactqp.result import Result, make_result
 from contactqp.scene import Scene
-from contactqp.solve import as_scene, chosen_formulation, solve_model
+from contactqp.solve import checked_call, chosen_formulation, solve_model
 from contactqp.values import value_array
 
 
@@ -155,12 +155,7 @@ def prepare(scene: Scene | str | None = None, method: str = "lagrange",
     """Prepare ``scene`` (a Scene, a scene file's path or None for the default scene) for many
     solves by ``method`` with ``contact`` and ``options`` as :func:`contactqp.solve` takes
     them: the options are checked, the scene laid out and its model built once."""
-    scene = as_scene(scene)
-    spec, options = checked_options(method, contact, formulation, options)
-    if contact == "equality":
-        conflict = equality_conflict(scene)
-        if conflict:
-            raise OptionError(conflict)
+    scene, spec, options = checked_call(scene, method, contact, formulation, options)
     model = build_model(scene)
     return Prepared(scene, method, contact, chosen_formulation(model, spec, formulation, contact),
                     options, model, spec)

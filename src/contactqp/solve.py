@@ -63,12 +63,7 @@ def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrang
     element elongations are unknowns too, tied to the displacements by equality rows whose
     multipliers are the element forces: :func:`contactqp.model.elongation_rows`).
     """
-    scene = as_scene(scene)
-    spec, options = checked_options(method, contact, formulation, options)
-    if contact == "equality":
-        conflict = equality_conflict(scene)
-        if conflict:
-            raise OptionError(conflict)
+    scene, spec, options = checked_call(scene, method, contact, formulation, options)
     start = time.perf_counter()
     model = build_model(scene)
     built = time.perf_counter()
@@ -78,6 +73,20 @@ def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrang
     options = {**options, "formulation": formulation} if formulation != "full" else options
     return make_result(model, solution, method=method, contact=contact, options=options,
                        timings={"build": built - start, "solve": solved - built})
+
+
+def checked_call(scene: Scene | str | os.PathLike | None, method: Any, contact: Any,
+                 formulation: Any, options: dict[str, Any]) -> tuple[Scene, Method, dict]:
+    """(the scene, the method, its options checked) for :func:`solve` and
+    :func:`contactqp.prepare`; an OptionError for bad options or for equality contact that
+    ties a node twice."""
+    scene = as_scene(scene)
+    spec, options = checked_options(method, contact, formulation, options)
+    if contact == "equality":
+        conflict = equality_conflict(scene)
+        if conflict:
+            raise OptionError(conflict)
+    return scene, spec, options
 
 
 def chosen_formulation(model: Model, spec: Method, formulation: str,
@@ -121,4 +130,4 @@ def solve_model(model: Model, spec: Method, contact: str, formulation: str,
                     solution.claimed_success, solution.info)
 
 
-__all__ = ["AUTO_CONDENSE", "AUTO_CONDENSE_NODES", "as_scene", "chosen_formulation", "solve", "solve_model"]
+__all__ = ["AUTO_CONDENSE", "AUTO_CONDENSE_NODES", "as_scene", "checked_call", "chosen_formulation", "solve", "solve_model"]
