@@ -54,6 +54,7 @@ from contactqp.model import (
     element_forces,
 )
 from contactqp.random_scenes import random_scene
+from contactqp.reference import reference
 from contactqp.scene import DistributedLoad
 
 METHODS = [("lagrange", {}), ("augmented", {}), ("qp", {"backend": "clarabel", "accuracy": "high"}),
@@ -342,11 +343,16 @@ def test_solve_reads_a_scene_file_given_its_path(tmp_path):
 @given(st.integers(0, 2**32 - 1))
 def test_every_method_gives_the_same_physical_answer_in_both_unit_systems(seed):
     """The same scene in SI and in mm-N-MPa: forces in N alike, displacements 1000 times
-    larger in mm. Every method and installed solver at its defaults gives the same answer in
-    both, to within the two Results' own error bounds, and the same verdict where the answer is
-    clear of the tolerances (the verdicts may only differ within a factor 10 of them)."""
+    larger in mm. Every method and installed solver at its defaults: where both answers are
+    verified they agree to within their error bounds; a verified answer is right in either
+    unit system (within the guarantee of the exact answer); and the explicit methods, whose
+    answers differ only by round-off, reach the same verdict where the answer is clear of
+    the tolerances (within a factor 10 of them the verdicts may differ). An iterative QP
+    solver's answers may differ more than that between unit systems (SCS through cvxpy,
+    seed 821943: 7e-5 apart in u, one verified and one flagged), and so may its verdicts."""
     scene = random_scene(np.random.default_rng(seed), max_bars=2)
     mm = contactqp.convert_units(scene, "mm-N-MPa")
+    exact = reference(scene)
     runs = [("lagrange", {}), ("penalty", {}), ("augmented", {})]
     runs += [("qp", {"backend": s.backend, "solver": s.solver}) for s in INSTALLED_SOLVERS]
     for method, options in runs:
@@ -354,14 +360,19 @@ def test_every_method_gives_the_same_physical_answer_in_both_unit_systems(seed):
             warnings.simplefilter("ignore")
             try:
                 si, in_mm = (contactqp.solve(s, method, **options) for s in (scene, mm))
-            except contactqp.SolverError:  # a method that fails says so (an active-set cycle)
+            except contactqp.SolverError:  # a method that fails says so
                 continue
+        for result, per_metre in ((si, 1.0), (in_mm, 1e3)):
+            if result.verified:  # right, in either unit system
+                F, U = result.force_scale, result.displacement_scale
+                assert np.abs(result.contact_force - exact.contact_force).max(initial=0.0) <= (
+                    contactqp.GUARANTEE[0] * F), (method, options, per_metre)
+                assert np.abs(result.u - per_metre * exact.displacement).max() <= (
+                    contactqp.GUARANTEE[1] * U), (method, options, per_metre)
         if not (si.verified and in_mm.verified):
-            # either answer within a factor 10 of the tolerances (a solver's answers differ
-            # between unit systems: ECOS, seed 104661, verified at 9.1e-6 in SI, within its
-            # bounds of the exact answer, and flagged at 1.4e-4 in mm)
             near = [max(r.residuals["force"], r.residuals["displacement"]) for r in (si, in_mm)]
-            assert si.verified == in_mm.verified or any(1e-6 <= x <= 1e-4 for x in near) or not (
+            assert method == "qp" or si.verified == in_mm.verified or any(
+                1e-6 <= x <= 1e-4 for x in near) or not (
                 np.isfinite(si.u).all() and np.isfinite(in_mm.u).all()), (method, options)
             continue
         # U = ‖K⁻¹P‖, and F for a press fit (|gap| × the stiffness the node sees): solves with
@@ -369,10 +380,12 @@ def test_every_method_gives_the_same_physical_answer_in_both_unit_systems(seed):
         # covers their round-off in either unit system (seed 10095783: F 1.04e-12 apart)
         assert in_mm.force_scale == pytest.approx(si.force_scale, rel=1e-6)
         assert in_mm.displacement_scale == pytest.approx(1e3 * si.displacement_scale, rel=1e-6)
+        # each bound is an estimate, held to 5 times itself (test_guarantee); augmented,
+        # seed 147999025: u 1.52e-13 apart against bounds summing to 1.36e-13
         assert np.abs(in_mm.contact_force - si.contact_force).max(initial=0.0) <= (
-            si.force_error_bound + in_mm.force_error_bound + 1e-12 * si.force_scale)
+            5.0 * (si.force_error_bound + in_mm.force_error_bound) + 1e-12 * si.force_scale)
         assert np.abs(in_mm.u / 1e3 - si.u).max() <= (
-            si.displacement_error_bound + in_mm.displacement_error_bound / 1e3
+            5.0 * (si.displacement_error_bound + in_mm.displacement_error_bound / 1e3)
             + 1e-12 * si.displacement_scale)
 
 
