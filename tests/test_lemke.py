@@ -88,3 +88,15 @@ def test_the_scale_of_the_numbers_does_not_matter():
     z, _ = lemke(M, q)
     z_scaled, _ = lemke(1e-9 * M, 1e-4 * q)
     np.testing.assert_allclose(z_scaled, 1e5 * z, rtol=1e-12)
+
+
+@pytest.mark.parametrize("q", [[-1.0, -1e-13], [-1e-13, -1.0], [-1.0, -1.0]])
+def test_a_contact_far_more_flexible_than_another_is_pivoted_like_any(q):
+    """M = diag(1, 1e-13): every contact closes, z = −q / diag(M). Scaled by its largest entry
+    alone, M's small diagonal fell below the pivot tolerance: z = (1, 0) for q = (−1, −1e-13),
+    and a ray for q = (−1e-13, −1)."""
+    M, q = np.diag([1.0, 1e-13]), np.array(q)
+    z, _ = lemke(M, q)
+    expected = -q / np.diag(M)
+    np.testing.assert_allclose(z, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
+

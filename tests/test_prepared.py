@@ -141,6 +141,8 @@ def test_the_layout_shares_what_the_values_leave_alone():
     ({"loads": [1.0, 2.0]}, r"loads must have shape \(1,\) \(one per point load"),
     ({"loads": [float("nan")]}, r"loads\[0\] must be finite, got nan"),
     ({"gaps": ["near"]}, "gaps must be numbers"),
+    ({"loads": ["400000"]}, "loads must be numbers"),  # text is not a number, as in a Scene
+    ({"gaps": [True]}, "gaps must be numbers"),
     ({"gaps": [float("inf")]}, r"gaps\[0\] must be finite, got inf"),
 ])
 def test_bad_values_are_one_clear_error_naming_the_argument(arguments, message):
@@ -149,6 +151,7 @@ def test_bad_values_are_one_clear_error_naming_the_argument(arguments, message):
 
 
 @pytest.mark.parametrize(("arguments", "message"), [
+    ({"loads": np.zeros((0, 1))}, "at least one case"),
     ({"loads": [1.0, 2.0]}, r"loads must have shape \(cases, 1\)"),
     ({"loads": [[1.0], [float("nan")]]}, r"loads\[1, 0\] must be finite, got nan"),
     ({"loads": [[1.0], [2.0]], "gaps": [[1e-4]]}, "as many cases"),

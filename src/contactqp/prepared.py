@@ -93,6 +93,8 @@ class Prepared:
             raise OptionError(f"loads and gaps must have as many cases (rows), got "
                               f"{len(load_cases)} and {len(gap_cases)}")
         cases = sizes.pop() if sizes else 1
+        if cases == 0:
+            raise OptionError("loads and gaps must have at least one case (row), got none")
         return Batch(tuple(
             self.solve(None if load_cases is None else load_cases[i],
                        None if gap_cases is None else gap_cases[i])

@@ -114,9 +114,12 @@ def value_array(name: str, values: Any, shape: tuple[int, ...], what: str,
     entry a finite number within range; else ``error`` naming ``name`` and what it holds
     (``what``: "one per point load, ..."), with the first bad entry."""
     try:
-        array = np.asarray(values, dtype=float)
+        raw = np.asarray(values)
     except (TypeError, ValueError):
         raise error(f"{name} must be numbers ({what}), got {values!r}") from None
+    if raw.dtype.kind not in "iuf":  # text, booleans, objects: not numbers, as in a Scene
+        raise error(f"{name} must be numbers ({what}), got {values!r}")
+    array = raw.astype(float)
     expected = tuple(array.shape[0] if n == -1 and array.ndim else n for n in shape)
     if array.shape != expected:
         parts = ["cases" if n == -1 else str(n) for n in shape]

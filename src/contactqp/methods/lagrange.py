@@ -200,10 +200,11 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
         if (C @ u - g > displacement_tolerance(u, g, P, model.K)).any():
             reason = "the loop settled with a wall still passed"
     except ActiveSetCycle as cycle:  # the same dependent rows can make the loop come back
-        if model.n_contacts > LEMKE_LIMIT:
+        if model.n_contacts > LEMKE_LIMIT or model.n_free * model.n_contacts > LEMKE_ENTRIES:
             raise
         reason = str(cycle)
-    if reason is not None and model.n_contacts <= LEMKE_LIMIT:
+    if reason is not None and model.n_contacts <= LEMKE_LIMIT and (
+            model.n_free * model.n_contacts <= LEMKE_ENTRIES):
         # Lemke's method on the same contact problem: finite, and it cannot cycle
         u, lam, iterations = _by_lemke(model)
         info = {"active_set": f"passed, then Lemke's method ({reason})"}
@@ -214,6 +215,7 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
 
 
 LEMKE_LIMIT = 500  # contact rows up to which a cycling loop hands over to Lemke's method
+LEMKE_ENTRIES = 2**24  # ... and free nodes x rows, the dense K⁻¹Cᵀ it builds (128 MB)
 
 
 def _by_lemke(model: Model | Condensed) -> tuple[np.ndarray, np.ndarray, int]:

@@ -20,25 +20,64 @@ import numpy as np
 
 from contactqp.errors import SolverError
 
-PIVOT_TOLERANCE = 1e-12  # entries below this (M and q scaled to 1) do not bound a ratio
+# Entries below this (of M scaled to a unit diagonal, q to 1) do not bound a ratio; a second
+# try loosens it. W = C K⁻¹ Cᵀ carries round-off of ~1e-12 of its diagonal from the solves with
+# K and is singular where rows depend on each other (where Lemke is called): 1e-12 took noise
+# as pivots (a false ray on a guarantee-benchmark scene, seed 2026 scene 198), 1e-10 did not.
+PIVOT_TOLERANCES = (1e-9, 1e-7)
+# An answer that leaves a gap passed by more than this (of q's largest entry) is tried again
+# with the looser tolerance, and the better of the two kept (the check judges either)
+SOLUTION_TOLERANCE = 1e-8
 
 
 def lemke(M: np.ndarray, q: np.ndarray, max_pivots: int | None = None) -> tuple[np.ndarray, int]:
     """(z, pivots) solving the LCP (module docstring); SolverError on a secondary ray (no
-    solution found) or past ``max_pivots`` (default 50 + 10 n)."""
+    solution found, with either pivot tolerance) or past ``max_pivots`` (default 50 + 10 n).
+    In floating point the answer may leave a gap passed by round-off: the caller's check
+    judges it.
+    M is scaled symmetrically to a unit diagonal first (D M D, D = diag(M)^-½), so that a
+    contact of small flexibility beside a large one is pivoted like any other."""
     M = np.asarray(M, dtype=float)
     q = np.asarray(q, dtype=float)
     n = q.size
     if n == 0 or q.min() >= 0.0:
         return np.zeros(n), 0
-    # scaled to 1 so that one tolerance serves: w = M z + q with z = z_s · (|q| / |M|)
-    m_scale = float(np.abs(M).max()) or 1.0
-    q_scale = float(np.abs(q).max())
+    diagonal = np.diag(M)
+    fallback = 1.0 / np.sqrt(float(np.abs(M).max()) or 1.0)
+    with np.errstate(divide="ignore"):
+        D = np.where(diagonal > 0.0, 1.0 / np.sqrt(diagonal), fallback)
+    scaled_q = D * q
+    q_scale = float(np.abs(scaled_q).max())
+    scaled_M, scaled_q = D[:, None] * M * D[None, :], scaled_q / q_scale
+    best, failure = None, None
+    for tolerance in PIVOT_TOLERANCES:  # the looser one only where the first falls short
+        try:
+            z, pivots = _lemke(scaled_M, scaled_q, tolerance, max_pivots)
+        except SolverError as error:
+            failure = error
+            continue
+        z = D * z * q_scale
+        passed = max(-float((M @ z + q).min()), 0.0)  # how far the answer leaves a gap passed
+        if best is None or passed < best[2]:
+            best = (z, pivots, passed)
+        if passed <= SOLUTION_TOLERANCE * float(np.abs(q).max()):
+            break
+    if best is None:
+        raise failure
+    return best[0], best[1]
+
+
+def _lemke(M: np.ndarray, q: np.ndarray, tolerance: float,
+           max_pivots: int | None) -> tuple[np.ndarray, int]:
+    """Lemke's pivots on M and q as given (scaled by the caller)."""
+    n = q.size
     # the tableau of [I, −M, −d] x = q over x = (w, z, z0), as B⁻¹ [I, −M, −d | q]
-    tableau = np.hstack((np.eye(n), -M / m_scale, -np.ones((n, 1)), (q / q_scale)[:, None]))
+    tableau = np.hstack((np.eye(n), -M, -np.ones((n, 1)), q[:, None]))
     basis = np.arange(n)  # the basic variable of each row: w first
     artificial = 2 * n
-    row = int(np.argmin(tableau[:, -1]))  # z0 enters where w is most negative
+    # z0 enters where w is most negative; among ties the last row, the lexicographic choice
+    # (its row of B⁻¹ = I is the least), so that every tableau stays lexicographically positive
+    row = int(np.flatnonzero(q <= q.min() + tolerance * abs(q.min()))[-1])
     entering = artificial
     limit = 50 + 10 * n if max_pivots is None else max_pivots
     for pivots in range(1, limit + 1):
@@ -48,9 +87,9 @@ def lemke(M: np.ndarray, q: np.ndarray, max_pivots: int | None = None) -> tuple[
             z = np.zeros(n)
             held = (basis >= n) & (basis < 2 * n)
             z[basis[held] - n] = np.maximum(tableau[held, -1], 0.0)
-            return z * (q_scale / m_scale), pivots
+            return z, pivots
         entering = leaving + n if leaving < n else leaving - n  # its complement
-        row = _lexicographic_ratio(tableau, entering, n)
+        row = _lexicographic_ratio(tableau, entering, n, tolerance)
         if row < 0:
             raise SolverError("lemke: a secondary ray (the complementarity problem has no "
                               "solution Lemke's method can reach)")
@@ -63,17 +102,17 @@ def _pivot(tableau: np.ndarray, row: int, column: int) -> None:
     tableau[others] -= np.outer(tableau[others, column], tableau[row])
 
 
-def _lexicographic_ratio(tableau: np.ndarray, column: int, n: int) -> int:
+def _lexicographic_ratio(tableau: np.ndarray, column: int, n: int, tolerance: float) -> int:
     """The row that leaves when ``column`` enters: the least ratio of the basic value to the
     column's entry over rows where it is positive, ties broken by the rows of B⁻¹ (the first n
     columns) divided the same way; −1 when no row bounds it."""
     entries = tableau[:, column]
-    rows = np.flatnonzero(entries > PIVOT_TOLERANCE)
+    rows = np.flatnonzero(entries > tolerance)
     if rows.size == 0:
         return -1
     for key in (-1, *range(n)):  # the basic values first, then B⁻¹ column by column
         ratios = tableau[rows, key] / entries[rows]
-        rows = rows[ratios <= ratios.min() + PIVOT_TOLERANCE * max(1.0, abs(ratios.min()))]
+        rows = rows[ratios <= ratios.min() + tolerance * max(1.0, abs(ratios.min()))]
         if rows.size == 1:
             break
     return int(rows[0])
