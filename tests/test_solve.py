@@ -294,7 +294,11 @@ def test_strain_and_condensed_equal_full(scene):
         assert np.allclose(contact_forces_on_nodes(Layout(scene), result.contact_force),
                            contact_forces_on_nodes(Layout(scene), full.contact_force), rtol=0,
                            atol=rtol * force_scale), (method, formulation)
-        assert np.allclose(result.u, full.u, rtol=0, atol=rtol * disp_scale), (method, formulation)
+        # against the larger of the test's scale and the scene's own U (a scene whose exact u
+        # is 0 has a test scale of 4e-11 m, where Clarabel's verified u is 4e-14 m)
+        assert np.allclose(result.u, full.u, rtol=0,
+                           atol=rtol * max(disp_scale, full.displacement_scale)), (method,
+                                                                                  formulation)
 
 
 @pytest.mark.parametrize(("method", "options"), STRAIN_METHODS)
@@ -353,6 +357,7 @@ def test_every_method_gives_the_same_physical_answer_in_both_unit_systems(seed):
     scene = random_scene(np.random.default_rng(seed), max_bars=2)
     mm = contactqp.convert_units(scene, "mm-N-MPa")
     exact = reference(scene)
+    exact_on_nodes = contact_forces_on_nodes(Layout(scene), exact.contact_force)
     runs = [("lagrange", {}), ("penalty", {}), ("augmented", {})]
     runs += [("qp", {"backend": s.backend, "solver": s.solver}) for s in INSTALLED_SOLVERS]
     for method, options in runs:
@@ -364,8 +369,12 @@ def test_every_method_gives_the_same_physical_answer_in_both_unit_systems(seed):
                 continue
         for result, per_metre in ((si, 1.0), (in_mm, 1e3)):
             if result.verified:  # right, in either unit system
+                # the contacts' forces on the nodes: where zero gaps close a loop of rows the
+                # split among them is not unique (augmented, seed 252: 535 N on the other row
+                # of a clamp, the same forces on every node), what they do to the bars is
                 F, U = result.force_scale, result.displacement_scale
-                assert np.abs(result.contact_force - exact.contact_force).max(initial=0.0) <= (
+                on_nodes = contact_forces_on_nodes(result.model.layout, result.contact_force)
+                assert np.abs(on_nodes - exact_on_nodes).max() <= (
                     contactqp.GUARANTEE[0] * F), (method, options, per_metre)
                 assert np.abs(result.u - per_metre * exact.displacement).max() <= (
                     contactqp.GUARANTEE[1] * U), (method, options, per_metre)
