@@ -245,13 +245,18 @@ def test_condensed_equals_full_for_the_explicit_methods(scene):
     for method in ("lagrange", "augmented"):
         condensed = contactqp.solve(scene, method, formulation="condensed")
         assert condensed.verified, condensed.message
-        # both are exact up to round-off of a dense inverse of S (cond(S) <= ~1e8 here)
+        # both exact up to round-off (cond(S) <= ~1e8 here), or, for the augmented method,
+        # up to where its updates stop: within the two Results' bounds (5 times: estimates,
+        # test_guarantee). Measured: augmented condensed 5.7e-15 m off a zero displacement
+        # where 1e-9 of the test's scale allowed 2.3e-15.
         # the net wall force on each node: a node clamped between two zero-gap walls may carry
         # any equal pair λ₊ = λ₋ >= 0 (they cancel), so only the net force is unique
+        forces = 5.0 * (full.force_error_bound + condensed.force_error_bound)
+        moves = 5.0 * (full.displacement_error_bound + condensed.displacement_error_bound)
         assert np.allclose(contact_forces_on_nodes(Layout(scene), condensed.contact_force),
                            contact_forces_on_nodes(Layout(scene), full.contact_force), rtol=1e-7,
-                           atol=1e-9 * force_scale)
-        assert np.allclose(condensed.u, full.u, rtol=1e-7, atol=1e-9 * disp_scale)
+                           atol=1e-9 * force_scale + forces)
+        assert np.allclose(condensed.u, full.u, rtol=1e-7, atol=1e-9 * disp_scale + moves)
 
 
 @pytest.mark.parametrize(("method", "options"), METHODS)
