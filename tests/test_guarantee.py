@@ -17,6 +17,7 @@ Under CI the examples are fixed (conftest); run locally, hypothesis draws fresh 
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -169,3 +170,21 @@ def test_the_issue_penalty_scene_is_flagged():
     assert default.verified
     # the same closed form at ε = 1e6·k₀: 1.1e6 / (1 + 1e-6), a few ulp of round-off
     assert default.contact_force[0] == pytest.approx(1.1e6 * 1e6 / (1e6 + 1.0), rel=1e-12)
+
+
+def test_the_forces_left_on_many_rows_add_up_where_a_bar_contact_ties_two_bars():
+    """A random scene (the hypothesis example seed=525 of the test above): three bars, a bar
+    contact between two of them, press fits of 1.9e11 N. Clarabel (qpsolvers, strain
+    formulation, unscaled) leaves about 100 N on each of four rows whose exact force is 0;
+    together they move the tied pair by 2.7e-4 m, 1.09e-5 of U. The displacement bound must
+    cover that (it took the largest of those forces alone: 2.0e-4 m, verified)."""
+    scene = contactqp.load_scene(Path(__file__).parent / "scenes"
+                                 / "coupled_pair_many_small_forces.toml")
+    result = solve_quietly(scene, "qp", {"backend": "qpsolvers", "solver": "clarabel",
+                                         "accuracy": "high", "scale": False}, "strain")
+    exact = reference(scene)
+    error = float(np.abs(result.u - exact.displacement).max())
+    assert error <= result.displacement_error_bound
+    if result.verified:
+        assert_within_bound(result, exact)
+
