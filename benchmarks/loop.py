@@ -11,8 +11,9 @@ job on the default scene, measured in the same run (issue 15's yardsticks).
 
 contactqp is timed as a user calls it: ``solve(scene, method)`` for one answer (each a checked
 Result); per case ``solve(scene.scaled_loads(f))`` in a loop; ``prepare(scene)`` once, then
-``prepared.solve(loads)`` for one case and ``prepared.solve_many(loads)`` for all. Every contactqp answer is
-compared with the hand version's; a mismatch stops the run. Writes loop.json.
+``prepared.solve(loads)`` for one case and ``prepared.solve_many(loads)`` for all. Every
+contactqp answer is compared with the hand version's; a mismatch stops the run. Writes
+loop.json.
 """
 
 from __future__ import annotations

@@ -139,9 +139,9 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
     nodal imbalances. Between two held nodes the exact answer of the imbalanced scene has
     element forces N_j − (c − r_j), i.e. its element force errors are c − r_j, with c such
     that the run's elongation errors (c − r_j)/k_j add up to nothing; a run held at one end
-    only (a bar's tail or head) has c the cut residual past the bar's free end. The displacement error is the running sum
-    of the elongation errors from the held end, and a held node's force error is the jump of c
-    across it."""
+    only (a bar's tail or head) has c the cut residual past the bar's free end. The
+    displacement error is the running sum of the elongation errors from the held end, and a
+    held node's force error is the jump of c across it."""
     element, compliance = layout.elements
     if element.size == 0:
         return 0.0, 0.0

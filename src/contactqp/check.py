@@ -196,7 +196,7 @@ def section_residual(forces: np.ndarray, nodes: np.ndarray, external: np.ndarray
         return max(largest(forces + outside[:-1]), abs(float(outside[-1])))
     order = np.argsort(nodes, kind="stable")
     steps, first = np.unique(nodes[order], return_index=True)
-    totals = np.cumsum(external[order])[np.append(first[1:], order.size) - 1]  # E after each step
+    totals = np.cumsum(external[order])[np.append(first[1:], order.size) - 1]  # E after a step
     balance = abs(float(totals[-1])) if totals.size else 0.0
     if forces.size == 0:
         return balance

@@ -57,11 +57,11 @@ def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrang
     ``formulation``: "auto" (the default: "condensed" where the method takes it, the scene
     has at most AUTO_CONDENSE contact nodes and at least AUTO_CONDENSE_NODES free nodes, and
     the method is not Lagrange with its hull active set, else "full"; the same answer, and the
-    Result's options say which ran), "full" (every free node an unknown), "condensed" (K factored once, the
-    method sees only the nodes that carry contacts, every displacement recovered from the same
-    factorisation: :func:`contactqp.model.condense`) or "strain" (lagrange and qp only: the
-    element elongations are unknowns too, tied to the displacements by equality rows whose
-    multipliers are the element forces: :func:`contactqp.model.elongation_rows`).
+    Result's options say which ran), "full" (every free node an unknown), "condensed" (the
+    method sees only the nodes that carry contacts, a chain again, and every displacement is
+    recovered by statics: :func:`contactqp.model.condense`) or "strain" (lagrange and qp
+    only: the element elongations are unknowns too, tied to the displacements by equality rows
+    whose multipliers are the element forces: :func:`contactqp.model.elongation_rows`).
     """
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
     start = time.perf_counter()
@@ -130,4 +130,5 @@ def solve_model(model: Model, spec: Method, contact: str, formulation: str,
                     solution.claimed_success, solution.info)
 
 
-__all__ = ["AUTO_CONDENSE", "AUTO_CONDENSE_NODES", "as_scene", "checked_call", "chosen_formulation", "solve", "solve_model"]
+__all__ = ["AUTO_CONDENSE", "AUTO_CONDENSE_NODES", "as_scene", "checked_call",
+           "chosen_formulation", "solve", "solve_model"]

@@ -192,6 +192,8 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
             return solution
         info = {"active_set": "hull, then passed (the hull's set came back)"}
     reason = None
+    lemke_fits = (model.n_contacts <= LEMKE_LIMIT
+                  and model.n_free * model.n_contacts <= LEMKE_ENTRIES)
     try:
         u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="lagrange",
                                              max_iterations=max_iterations, start=start)
@@ -200,11 +202,10 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
         if (C @ u - g > displacement_tolerance(u, g, P, model.K)).any():
             reason = "the loop settled with a wall still passed"
     except ActiveSetCycle as cycle:  # the same dependent rows can make the loop come back
-        if model.n_contacts > LEMKE_LIMIT or model.n_free * model.n_contacts > LEMKE_ENTRIES:
+        if not lemke_fits:
             raise
         reason = str(cycle)
-    if reason is not None and model.n_contacts <= LEMKE_LIMIT and (
-            model.n_free * model.n_contacts <= LEMKE_ENTRIES):
+    if reason is not None and lemke_fits:
         # Lemke's method on the same contact problem: finite, and it cannot cycle
         u, lam, iterations = _by_lemke(model)
         info = {"active_set": f"passed, then Lemke's method ({reason})"}

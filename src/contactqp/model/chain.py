@@ -54,9 +54,7 @@ class Model:
     def with_layout(self, layout: Layout) -> Model:
         """This model for a scene that differs only in its load values and gaps (``layout``
         from :meth:`Layout.with_values`): the numbering, K and C shared, P and g anew."""
-        model = Model(layout, self.free, self.band,
-                      np.delete(layout.nodal_loads, np.sort(layout.support_nodes)), self.C,
-                      layout.rows.gap)
+        model = Model(layout, self.free, self.band, free_loads(layout), self.C, layout.rows.gap)
         for name in ("K", "determinate", "compliance_to_support"):  # K alone, not P or g
             if name in self.__dict__:
                 model.__dict__[name] = self.__dict__[name]
@@ -200,8 +198,13 @@ def build_model(scene: Scene | Layout) -> Model:
                                                           minlength=rows.gap.size))))
     C = sp.csr_array((rows.coefficient[entries], column[rows.node[entries]], indptr),
                      shape=(rows.gap.size, free.size))
-    P = np.delete(layout.nodal_loads, supports)
+    P = free_loads(layout)
     return Model(layout, free, band, P, C, rows.gap)
+
+
+def free_loads(layout: Layout) -> np.ndarray:
+    """P: the nodal loads on the free nodes (the supports taken out), in order."""
+    return np.delete(layout.nodal_loads, layout.support_nodes)
 
 
 GREEN_ROWS = 16  # right-hand sides with at most this many loaded rows use the Green's function

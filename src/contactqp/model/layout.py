@@ -38,6 +38,12 @@ TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_positio
             "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes")
 
 
+def _gaps(scene: Scene) -> np.ndarray:
+    """g, the gap of every contact row: the walls, then the bar contacts."""
+    items = scene.walls + scene.contacts
+    return np.fromiter((item.gap for item in items), float, len(items))
+
+
 def _read_only(array: np.ndarray) -> np.ndarray:
     array.flags.writeable = False
     return array
@@ -58,11 +64,7 @@ class Layout:
             if name in self.__dict__:
                 layout.__dict__[name] = self.__dict__[name]
         if "rows" in self.__dict__:
-            rows = self.rows
-            gaps = np.fromiter((w.gap for w in scene.walls), float, len(scene.walls))
-            if scene.contacts:
-                gaps = np.concatenate((gaps, [c.gap for c in scene.contacts]))
-            layout.__dict__["rows"] = rows._replace(gap=_read_only(gaps))
+            layout.__dict__["rows"] = self.rows._replace(gap=_read_only(_gaps(scene)))
         return layout
 
     @cached_property
@@ -291,8 +293,7 @@ class Layout:
                                        n_walls + np.arange(n_contacts))).astype(np.intp)),
             _read_only(np.concatenate((wall_nodes, a, b)).astype(np.intp)),
             _read_only(np.concatenate((signs, np.ones(n_contacts), -np.ones(n_contacts)))),
-            _read_only(np.concatenate((column(walls, "gap", float),
-                                       column(contacts, "gap", float)))))
+            _read_only(_gaps(self.scene)))
 
     @property
     def gaps(self) -> np.ndarray:
