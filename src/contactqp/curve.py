@@ -5,12 +5,11 @@ per method, the displacement of the load point (:meth:`Layout.load_point`), the 
 and the penetrations, each step a checked Result. Nothing is rebuilt per step that does not
 change with the loads:
 
-- lagrange, penalty and augmented: the model is condensed once onto its contact nodes (the
-  condensed formulation, :func:`contactqp.model.condense`, a chain); a step solves only the
-  contact unknowns under the scaled free displacements t·K⁻¹P and recovers
-  u = t·K⁻¹P − K⁻¹Cᵀλ by statics.
-- qp through cvxpy: the parametrised (DPP) problem is built once per structure and re-solved
-  with new load parameters (its Result's ``info["cache"]`` says "hit").
+each method is prepared once (:func:`contactqp.prepare`) and its steps are one batch
+(:meth:`contactqp.Prepared.solve_many`): Lagrange multipliers and the penalty solve every step
+at once from one factorisation of K; the augmented Lagrangian and the QP solvers step by step
+(through cvxpy the parametrised (DPP) problem is built once per structure and re-solved with
+new load parameters: its Result's ``info["cache"]`` says "hit").
 
 With unilateral contact the curve has a kink where the first contact closes, at the load
 factor t* = g / (C K⁻¹ P) of the first contact to close (:func:`first_contact_factor`).
@@ -18,25 +17,17 @@ factor t* = g / (C K⁻¹ P) of the first contact to close (:func:`first_contact
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from contactqp.errors import OptionError
-from contactqp.methods import checked_options
-from contactqp.model import (
-    Condensed,
-    Layout,
-    Model,
-    build_model,
-    condense,
-    wall_stiffness,
-)
-from contactqp.result import Result, make_result, plain
+from contactqp.model import Model, build_model, wall_stiffness
+from contactqp.prepared import prepare
+from contactqp.result import Result, plain
 from contactqp.scene import Scene
-from contactqp.solve import as_scene, solve, solve_model
+from contactqp.solve import as_scene
 from contactqp.values import whole_number
 
 # name -> (method, contact, options): unilateral contact, the textbook equality (which pulls
@@ -121,57 +112,21 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
               methods: dict[str, tuple[str, str, dict[str, Any]]] | None = None) -> LoadPath:
     """The force–displacement curve of ``scene`` (default scene when None) at ``steps`` load
     factors from 0 to 1, for each of ``methods`` (name -> (method, contact, options); default
-    :func:`curve_methods`)."""
+    :func:`curve_methods`): each method prepared once and its steps solved as one batch
+    (:meth:`contactqp.Prepared.solve_many`)."""
     scene = as_scene(scene)
     factors = _factors(steps)
     model = build_model(scene)
     methods = curve_methods(model) if methods is None else methods
     node = model.layout.load_point()
-    condensed = None  # factored on first use, then shared by every explicit method
     paths = {}
     for name, (method, contact, options) in methods.items():
-        checked_options(method, contact, "full", options)
-        if method in ("lagrange", "penalty", "augmented"):
-            if condensed is None:
-                start = time.perf_counter()
-                condensed = (condense(model), time.perf_counter() - start)
-            results = _stepped(model, condensed, factors, method, contact, options)
-        else:
-            results = [solve(scene.scaled_loads(t), method, contact, **options) for t in factors]
-        paths[name] = MethodPath(
-            np.array([r.u[node] for r in results]),
-            np.array([r.contact_force for r in results]).reshape(factors.size, scene.n_contacts),
-            np.array([r.penetration for r in results]).reshape(factors.size, scene.n_contacts),
-            np.array([r.verified for r in results]), np.array([r.physical for r in results]),
-            tuple(results),
-        )
+        prepared = prepare(scene, method, contact, **options)
+        batch = prepared.solve_many(loads=np.outer(factors, prepared.scene_loads))
+        paths[name] = MethodPath(batch.u[:, node], batch.contact_force, batch.penetration,
+                                 batch.verified, batch.physical,
+                                 tuple(batch[step] for step in range(factors.size)))
     return LoadPath(scene, factors, node, paths)
-
-
-def _stepped(model: Model, condensed: tuple[Condensed, float] | None, factors: np.ndarray,
-             method: str, contact: str, options: dict[str, Any]) -> list[Result]:
-    """One explicit method along the load factors on the model's factorisation ``condensed``
-    (the Condensed problem and the time it took); None: a full solve per step."""
-    scene = model.scene
-    if condensed is None:
-        return [solve(scene.scaled_loads(t), method, contact, **options) for t in factors]
-    factored, factor_time = condensed
-    spec, checked = checked_options(method, contact, "condensed", options)
-    results = []
-    for t in factors:
-        start = time.perf_counter()
-        # the loads scale the free displacements t·K⁻¹P and the condensed load alike
-        step = factored.scaled(t)
-        solution = solve_model(step.full, spec, contact, "condensed", checked, condensed=step)
-        solved = time.perf_counter()
-        scaled = replace(model, layout=Layout(scene.scaled_loads(t)), P=t * model.P)
-        scaled.__dict__["free_displacement"] = step.u0  # K⁻¹P, for the check
-        results.append(make_result(
-            scaled, solution, method=method, contact=contact,
-            options={**options, "formulation": "condensed", "load_factor": float(t)},
-            timings={"build": factor_time if t == factors[0] else 0.0, "solve": solved - start},
-        ))
-    return results
 
 
 __all__ = [

@@ -7,23 +7,24 @@ those values, sharing everything that does not depend on them (:meth:`Scene.with
 :meth:`Layout.with_values`, :meth:`Model.with_layout`). :meth:`Prepared.solve_many` solves a
 batch of cases and returns them as a :class:`Batch` of arrays, every case checked.
 
-Each case is solved and checked on its own (the batch is a loop over the cases); solving all
-cases at once (one factorisation, many right-hand sides, the check vectorised) is not done yet.
+The cases of a batch are solved and checked together where the method allows
+(:mod:`contactqp.batch`).
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import Any
 
 import numpy as np
 
+from contactqp.batch import Batch, solve_batch, tiled_scene
 from contactqp.errors import OptionError
 from contactqp.feasibility import equality_conflict
 from contactqp.methods import Method
 from contactqp.model import Model, build_model
+from contactqp.model.layout import TOPOLOGY
 from contactqp.result import Result, make_result
 from contactqp.scene import Scene
 from contactqp.solve import checked_call, chosen_formulation, solve_model
@@ -49,6 +50,7 @@ class Prepared:
     options: dict[str, Any]
     model: Model
     spec: Method = field(repr=False)
+    _tiled: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
     def n_loads(self) -> int:
@@ -64,8 +66,14 @@ class Prepared:
         """The checked Result of the prepared scene with these load values and gaps (None:
         the scene's own), as :func:`contactqp.solve` gives it for that scene."""
         start = time.perf_counter()
-        scene = self.scene.with_values(loads, gaps)
-        if self.contact == "equality" and gaps is not None:
+        return self.solve_scene(self.scene.with_values(loads, gaps), start)
+
+    def solve_scene(self, scene: Scene, start: float | None = None) -> Result:
+        """:meth:`solve` for ``scene``, made by ``self.scene.with_values`` (the same bars,
+        supports, loads and contacts; other values)."""
+        start = time.perf_counter() if start is None else start
+        if self.contact == "equality" and (scene.walls is not self.scene.walls
+                                           or scene.contacts is not self.scene.contacts):
             conflict = equality_conflict(scene)
             if conflict:
                 raise OptionError(conflict)
@@ -73,15 +81,14 @@ class Prepared:
         built = time.perf_counter()
         solution = solve_model(model, self.spec, self.contact, self.formulation, self.options)
         solved = time.perf_counter()
-        options = (self.options if self.formulation == "full"
-                   else {**self.options, "formulation": self.formulation})
         return make_result(model, solution, method=self.method, contact=self.contact,
-                           options=options,
+                           options=self.result_options,
                            timings={"build": built - start, "solve": solved - built})
 
     def solve_many(self, loads: Any = None, gaps: Any = None) -> Batch:
         """Every case of ``loads`` (cases x :attr:`n_loads`) and ``gaps`` (cases x
-        :attr:`n_gaps`), either None for the scene's own values; each solved and checked."""
+        :attr:`n_gaps`), either None for the scene's own values; solved together where the
+        method allows and every case checked (:mod:`contactqp.batch`)."""
         load_cases = None if loads is None else value_array(
             "loads", loads, (-1, self.n_loads),
             "a row per case: one per point load, then one per distributed load", OptionError)
@@ -95,60 +102,32 @@ class Prepared:
         cases = sizes.pop() if sizes else 1
         if cases == 0:
             raise OptionError("loads and gaps must have at least one case (row), got none")
-        return Batch(tuple(
-            self.solve(None if load_cases is None else load_cases[i],
-                       None if gap_cases is None else gap_cases[i])
-            for i in range(cases)))
+        return solve_batch(self, load_cases, gap_cases, cases)
 
+    @property
+    def scene_loads(self) -> np.ndarray:
+        """The scene's own load values: the point loads' forces, then the distributed loads'
+        intensities."""
+        return np.array([p.force for p in self.scene.loads]
+                        + [q.intensity for q in self.scene.distributed], dtype=float)
 
-@dataclass(frozen=True, eq=False)
-class Batch:
-    """The Results of many cases (:meth:`Prepared.solve_many`), with their quantities as
-    arrays, one row per case; ``batch[i]`` is case i's Result."""
+    @property
+    def result_options(self) -> dict[str, Any]:
+        """The options as every Result of this preparation shows them."""
+        return (self.options if self.formulation == "full"
+                else {**self.options, "formulation": self.formulation})
 
-    results: tuple[Result, ...]
-
-    def __len__(self) -> int:
-        return len(self.results)
-
-    def __getitem__(self, case: int) -> Result:
-        return self.results[case]
-
-    def _stack(self, name: str) -> np.ndarray:
-        return np.array([getattr(result, name) for result in self.results])
-
-    @cached_property
-    def contact_force(self) -> np.ndarray:
-        """cases x contact rows (force)."""
-        return self._stack("contact_force")
-
-    @cached_property
-    def u(self) -> np.ndarray:
-        """cases x nodes (displacement)."""
-        return self._stack("u")
-
-    @cached_property
-    def reactions(self) -> np.ndarray:
-        """cases x supports (force)."""
-        return self._stack("reactions")
-
-    @cached_property
-    def penetration(self) -> np.ndarray:
-        """cases x contact rows (length; > 0: past the wall)."""
-        return self._stack("penetration")
-
-    @cached_property
-    def verified(self) -> np.ndarray:
-        """Whether each case passed its check."""
-        return self._stack("verified").astype(bool)
-
-    @cached_property
-    def residuals(self) -> dict[str, np.ndarray]:
-        """Each residual of the check (contactqp.check), one per case (NaN where a contact
-        kind has none)."""
-        names = self.results[0].residuals if self.results else {}
-        return {name: np.array([np.nan if r.residuals[name] is None else r.residuals[name]
-                                for r in self.results]) for name in names}
+    def tiled(self, cases: int) -> Model:
+        """The model of the scene repeated ``cases`` times (:func:`contactqp.batch.tiled_scene`),
+        made once per number of cases (the last one kept)."""
+        kept = self._tiled
+        if kept.get("cases") != cases:
+            kept.clear()
+            model = build_model(tiled_scene(self.scene, cases))
+            for name in TOPOLOGY:  # made here once, shared by every batch's layout
+                getattr(model.layout, name)
+            kept.update(cases=cases, model=model)
+        return kept["model"]
 
 
 def prepare(scene: Scene | str | None = None, method: str = "lagrange",

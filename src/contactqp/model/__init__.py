@@ -12,7 +12,9 @@ from contactqp.model.chain import (
     build_model,
     determinate_chain_solve,
     displacement_scale,
+    displacement_scale_rule,
     elongation_rows,
+    force_scale_rule,
     wall_stiffness,
     without_circulation,
 )
@@ -27,6 +29,7 @@ from contactqp.model.layout import (
     largest,
     link_forces,
     load_force_scale,
+    load_force_terms,
     node_set,
     penetration,
     run_ends,
@@ -38,7 +41,8 @@ from contactqp.model.layout import (
 __all__ = [
     "Condensed", "ContactRows", "Layout", "Model", "build_model", "condense",
     "contact_forces_on_nodes", "count_up_to", "determinate_chain_solve",
-    "displacement_scale", "element_forces", "elongation_rows", "in_set", "largest",
-    "link_forces", "load_force_scale", "node_set", "penetration", "run_ends", "run_starts",
+    "displacement_scale", "displacement_scale_rule", "element_forces", "elongation_rows",
+    "force_scale_rule", "in_set", "largest",
+    "link_forces", "load_force_scale", "load_force_terms", "node_set", "penetration", "run_ends", "run_starts",
     "seen_stiffness", "spread", "wall_stiffness", "without_circulation",
 ]

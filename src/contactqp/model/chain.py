@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -137,15 +137,14 @@ class Model:
         with the supports held. In a scene that nothing loads (the answer is u = 0, λ = 0) it
         is the softest element's stiffness times :attr:`displacement_scale`."""
         layout = self.layout
-        scale = max(layout.load_scale, layout.press_fit_force)
-        if scale > 0.0:
-            return scale
-        return float(layout.element_stiffness.min()) * self.displacement_scale
+        return float(force_scale_rule(layout.load_scale, layout.press_fit_force,
+                                      float(layout.element_stiffness.min()),
+                                      self.displacement_scale))
 
     @cached_property
     def displacement_scale(self) -> float:
         """U: the scene's displacement scale (:func:`displacement_scale`)."""
-        return displacement_scale(self.free_displacement, self.g, self.scene)
+        return displacement_scale(self.free_displacement, self.g, self.layout)
 
     def full_displacements(self, u_free: np.ndarray) -> np.ndarray:
         """Displacements of every node, zero at the supports."""
@@ -155,15 +154,29 @@ class Model:
                          [node - i for i, node in enumerate(supports)], 0.0)
 
 
-def displacement_scale(free_displacement: np.ndarray, g: np.ndarray, scene: Scene) -> float:
+def displacement_scale(free_displacement: np.ndarray, g: np.ndarray, layout: Layout) -> float:
     """U, from the loads and the prescribed gaps alone: the largest displacement the loads
     cause with no contact, ‖K⁻¹P‖∞, or the deepest press fit (largest −gap), whichever is
     larger. In a scene that nothing loads, the widest gap, or with none the longest bar."""
-    scale = max(largest(free_displacement), float(np.max(-g, initial=0.0)))
-    if scale > 0.0:
-        return scale
-    widest = largest(g)
-    return widest if widest > 0.0 else max(float(b.lengths.sum()) for b in scene.bars)
+    return float(displacement_scale_rule(largest(free_displacement),
+                                         float(np.max(-g, initial=0.0)), largest(g),
+                                         layout.longest_bar))
+
+
+def force_scale_rule(load: Any, press_fit: Any, softest: Any, U: Any) -> np.ndarray:
+    """F by its rule (:attr:`Model.force_scale`): the larger of the loads' force scale and the
+    largest press-fit force where that is > 0, else the softest element's stiffness × U.
+    Elementwise, so that a batch of cases (:mod:`contactqp.batch`) follows the same rule."""
+    scale = np.maximum(load, press_fit)
+    return np.where(scale > 0.0, scale, softest * U)
+
+
+def displacement_scale_rule(free: Any, press_depth: Any, widest: Any, longest: Any
+                            ) -> np.ndarray:
+    """U by its rule (:func:`displacement_scale`): the larger of ‖K⁻¹P‖∞ and the deepest press
+    fit where that is > 0, else the widest gap where > 0, else the longest bar. Elementwise."""
+    scale = np.maximum(free, press_depth)
+    return np.where(scale > 0.0, scale, np.where(widest > 0.0, widest, longest))
 
 
 def build_model(scene: Scene | Layout) -> Model:
@@ -318,4 +331,5 @@ def wall_stiffness(model: Model | Condensed) -> float | None:
 
 
 __all__ = ["Model", "build_model", "determinate_chain_solve", "displacement_scale",
-           "elongation_rows", "wall_stiffness", "without_circulation"]
+           "displacement_scale_rule", "elongation_rows", "force_scale_rule", "wall_stiffness",
+           "without_circulation"]

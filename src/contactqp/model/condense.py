@@ -84,7 +84,7 @@ class Condensed:
     @cached_property
     def displacement_scale(self) -> float:
         """U of the condensed problem: its free displacement or its deepest press fit."""
-        return displacement_scale(self.free_displacement, self.g, self.layout.scene)
+        return displacement_scale(self.free_displacement, self.g, self.layout)
 
     def displacements(self, contact_force: np.ndarray) -> np.ndarray:
         """Free-node displacements of the full model under contact forces λ: u = K⁻¹P −

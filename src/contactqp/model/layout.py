@@ -35,7 +35,8 @@ class ContactRows(NamedTuple):
 TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_position",
             "element_bar_ends", "opposed_entries", "support_mask", "junctions",
             "element_stiffness", "areas", "yield_stress", "compliance", "chained_compliance",
-            "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes")
+            "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes",
+            "longest_bar")
 
 
 def _gaps(scene: Scene) -> np.ndarray:
@@ -151,12 +152,19 @@ class Layout:
     def press_fit_force(self) -> float:
         """The largest force that pushes a node back to a wall that starts past it (gap < 0):
         |gap| × the stiffness the node sees with the supports held (N); 0 without one."""
+        return float(np.max(self.press_fit_forces, initial=0.0))
+
+    @cached_property
+    def press_fit_forces(self) -> np.ndarray:
+        """Per wall, the force that pushes its node back when the wall starts past it
+        (:attr:`press_fit_force`), 0 for a wall that does not."""
         walls = self.rows.gap[: len(self.scene.walls)]
+        forces = np.zeros(walls.size)
         press = np.flatnonzero(walls < 0.0)
-        if press.size == 0:
-            return 0.0
-        stiffness = seen_stiffness(self, np.zeros(0, dtype=np.intp), self.rows.node[press])
-        return float(np.max(-walls[press] * stiffness))
+        if press.size:
+            stiffness = seen_stiffness(self, np.zeros(0, dtype=np.intp), self.rows.node[press])
+            forces[press] = -walls[press] * stiffness
+        return _read_only(forces)
 
     @cached_property
     def support_mask(self) -> np.ndarray:
@@ -222,6 +230,12 @@ class Layout:
             return None
         return self._per_element([np.full(b.n_elements, np.nan if b.yield_stress is None
                                           else b.yield_stress) for b in bars])
+
+    @cached_property
+    def longest_bar(self) -> float:
+        """The length of the longest bar (m)."""
+        bars = {id(b): b for b in self.scene.bars}.values()  # a bar repeated counts once
+        return max(float(b.lengths.sum()) for b in bars)
 
     @cached_property
     def compliance(self) -> np.ndarray:
@@ -483,6 +497,12 @@ def load_force_scale(layout: Layout) -> float:
     """The largest force the scene's loads put through any cut of a bar (N): over every bar
     and every node, the resultant of the loads (point and distributed) on either side, and
     every nodal load itself. A distributed load counts whole, not per node."""
+    return largest(load_force_terms(layout))
+
+
+def load_force_terms(layout: Layout) -> np.ndarray:
+    """Per node, the largest of |the loads' resultant on either side of it in its bar| and
+    |its nodal load| (N): :func:`load_force_scale` is the largest over the nodes."""
     loads = layout.nodal_loads
     offsets = layout.node_offsets
     sizes = np.diff(offsets)
@@ -490,9 +510,9 @@ def load_force_scale(layout: Layout) -> float:
     # from each bar's node 0
     left -= np.repeat(np.concatenate(([0.0], left[offsets[1:-1] - 1])), sizes)
     right = np.repeat(left[offsets[1:] - 1], sizes) - left
-    return max(largest(left), largest(right), largest(loads))
+    return np.maximum(np.maximum(np.abs(left), np.abs(right)), np.abs(loads))
 
 
 __all__ = ["ContactRows", "Layout", "contact_forces_on_nodes", "element_forces", "in_set",
-           "largest", "link_forces", "load_force_scale", "node_set", "penetration",
-           "run_ends", "run_starts", "seen_stiffness", "spread"]
+           "largest", "link_forces", "load_force_scale", "load_force_terms", "node_set",
+           "penetration", "run_ends", "run_starts", "seen_stiffness", "spread"]

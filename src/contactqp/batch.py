@@ -1,0 +1,298 @@
+"""Many cases of one prepared scene, solved and checked together (:meth:`Prepared.solve_many`).
+
+A batch of cases is one scene: the prepared scene's bars repeated once per case, each copy
+with its case's load values and gaps (:func:`tiled_scene`). Its exact answer is every case's
+exact answer side by side, so it is checked as any scene is, by the one check
+(:mod:`contactqp.check`), in one pass over all the cases.
+
+- **Solving.** Lagrange multipliers and the penalty, with few contact rows
+  (:func:`contactqp.methods.cases.fits`), solve every case at once from one factorisation of
+  K (:mod:`contactqp.methods.cases`). Every other method, and a scene with many contact rows,
+  is solved case by case, each case a :meth:`Prepared.solve`.
+- **Each case's verdict.** The check of the whole batch bounds the error of every force and
+  displacement of every case by one number each (N and m) and gives each residual as one
+  largest value. A case is verified when these, measured against its own force and
+  displacement scales F and U (the same rule as :attr:`contactqp.model.Model.force_scale`),
+  are within :data:`contactqp.check.TOLERANCES` (with 0.1 % to spare, for the round-off of
+  sums over the other cases): then its error is within its own guarantee. Any other case is
+  checked alone (:meth:`Batch.__getitem__`); if that fails too, or its active set did not
+  settle, it is solved again on its own (a single-case solve that raises leaves the batch's
+  answer, flagged, and the error in :attr:`Batch.failures`). So :attr:`Batch.residuals` are,
+  for the cases verified together, the batch's largest residuals in the case's own scales (at
+  least the case's own, up to that round-off: 1e-9); ``batch[i]`` is case i's Result, checked
+  alone, with its own residuals.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from contactqp.check import TOLERANCES
+from contactqp.errors import ContactqpError, SolverError
+from contactqp.methods import cases as many
+from contactqp.model import Model, displacement_scale_rule, force_scale_rule, load_force_terms
+from contactqp.result import Result, Solution, make_result
+from contactqp.scene import Scene
+
+if TYPE_CHECKING:
+    from contactqp.prepared import Prepared
+
+VECTORISED = ("lagrange", "penalty")  # methods solved for every case at once
+SPARE = 0.999  # a case verified together has its residuals within this × the tolerances
+
+
+def tiled_scene(scene: Scene, cases: int) -> Scene:
+    """``scene`` repeated ``cases`` times as one scene: the copies' bars one after another, each
+    copy's supports, loads, walls and bar contacts on its own bars (all the copies' walls, then
+    all their bar contacts, case after case)."""
+    n = len(scene.bars)
+
+    def moved(items: tuple, *names: str) -> tuple:
+        return tuple(replace(item, **{name: getattr(item, name) + case * n for name in names})
+                     for case in range(cases) for item in items)
+
+    return Scene(scene.bars * cases, moved(scene.supports, "bar"), moved(scene.loads, "bar"),
+                 moved(scene.walls, "bar"), name=f"{scene.name} x {cases} cases",
+                 distributed=moved(scene.distributed, "bar"),
+                 contacts=moved(scene.contacts, "bar_a", "bar_b"), units=scene.units)
+
+
+def tiled_values(scene: Scene, loads: np.ndarray, gaps: np.ndarray) -> tuple[np.ndarray,
+                                                                            np.ndarray]:
+    """The tiled scene's load values and gaps (:meth:`Scene.with_values` order) from the
+    cases' (cases x loads, cases x gaps, each in the prepared scene's order)."""
+    points, walls = len(scene.loads), len(scene.walls)
+    return (np.concatenate((loads[:, :points].ravel(), loads[:, points:].ravel())),
+            np.concatenate((gaps[:, :walls].ravel(), gaps[:, walls:].ravel())))
+
+
+def per_case_rows(values: np.ndarray, walls: int, cases: int) -> np.ndarray:
+    """A tiled scene's per-row values (all walls, then all bar contacts) as cases x rows."""
+    return np.hstack((values[: walls * cases].reshape(cases, walls),
+                      values[walls * cases:].reshape(cases, -1)))
+
+
+def tiled_rows(values: np.ndarray, walls: int) -> np.ndarray:
+    """cases x rows back to the tiled scene's row order (:func:`per_case_rows`)."""
+    return np.concatenate((values[:, :walls].ravel(), values[:, walls:].ravel()))
+
+
+def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
+                gaps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(F, U) of every case of a tiled model, by the rules of :attr:`Model.force_scale` and
+    :func:`contactqp.model.displacement_scale` (``free_displacement`` and ``gaps`` per case)."""
+    layout, walls = model.layout, len(model.scene.walls) // cases
+    widest = np.abs(gaps).max(axis=1, initial=0.0)
+    U = displacement_scale_rule(np.abs(free_displacement).max(axis=1, initial=0.0),
+                                np.max(-gaps, axis=1, initial=0.0), widest,
+                                layout.longest_bar)
+    load = load_force_terms(layout).reshape(cases, -1).max(axis=1)
+    press = layout.press_fit_forces.reshape(cases, walls).max(axis=1, initial=0.0)
+    F = force_scale_rule(load, press, float(layout.element_stiffness.min()), U)
+    return F, U
+
+
+@dataclass(frozen=True, eq=False)
+class Batch:
+    """Many cases of a prepared scene (module docstring), one row per case in every array;
+    ``batch[i]`` is case i's :class:`~contactqp.result.Result`.
+
+    Attributes
+    ----------
+    u : cases x nodes (displacement). contact_force : cases x contact rows (force).
+    reactions : cases x supports (force). penetration : cases x contact rows (length; > 0:
+    past the wall). verified, physical : per case. residuals : each residual of the check per
+    case (NaN where a contact kind has none). force_error_bound, displacement_error_bound,
+    force_scale, displacement_scale : per case (force, length). iterations : per case.
+    alone : the cases solved on their own (case -> its Result). time : the batch's seconds.
+    """
+
+    prepared: Prepared = field(repr=False)
+    loads: np.ndarray | None = field(repr=False)
+    gaps: np.ndarray | None = field(repr=False)
+    u: np.ndarray
+    contact_force: np.ndarray
+    reactions: np.ndarray
+    penetration: np.ndarray
+    verified: np.ndarray
+    physical: np.ndarray
+    residuals: dict[str, np.ndarray]
+    force_error_bound: np.ndarray
+    displacement_error_bound: np.ndarray
+    force_scale: np.ndarray
+    displacement_scale: np.ndarray
+    iterations: np.ndarray
+    solver: str
+    alone: dict[int, Result] = field(repr=False)
+    failures: dict[int, str] = field(default_factory=dict)
+    time: float = 0.0
+    _results: dict[int, Result] = field(default_factory=dict, repr=False)
+
+    def __len__(self) -> int:
+        return self.u.shape[0]
+
+    def __getitem__(self, case: int) -> Result:
+        case = range(len(self))[case]  # negative indices, and IndexError past the end
+        if case in self.alone:
+            return self.alone[case]
+        if case not in self._results:
+            self._results[case] = _checked_alone(
+                self.prepared, self.loads, self.gaps, case,
+                self.u[case][self.prepared.model.free], self.contact_force[case], self.solver,
+                int(self.iterations[case]))
+        return self._results[case]
+
+
+def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,
+                cases: int) -> Batch:
+    """Every case of ``loads`` and ``gaps`` (None: the scene's own values in every case),
+    solved and checked (module docstring)."""
+    start = time.perf_counter()
+    scene = prepared.scene
+    if not (prepared.method in VECTORISED and prepared.formulation in ("full", "condensed")
+            and many.fits(prepared.model) and prepared.options.get("active_set") != "passed"):
+        return _case_by_case(prepared, loads, gaps, cases, start)
+    tiled = prepared.tiled(cases)
+    tiled_loads, tiled_gaps = tiled_values(scene, _values(loads, prepared.scene_loads, cases),
+                                           _values(gaps, prepared.model.g, cases))
+    try:
+        batch_scene = tiled.scene.with_values(None if loads is None else tiled_loads,
+                                              None if gaps is None else tiled_gaps)
+    except ContactqpError:  # bad values: say which case, as the case alone says it
+        for case in range(cases):
+            _case_scene(prepared, loads, gaps, case)
+        raise
+    model = tiled.with_layout(batch_scene.layout)
+    walls = len(scene.walls)
+    gap_cases = per_case_rows(model.g, walls, cases)
+    solved = many.solve_cases(prepared.model, prepared.contact, model.P.reshape(cases, -1),
+                              gap_cases, penalty=_penalty(prepared),
+                              max_iterations=prepared.options.get("max_iterations"))
+    model.__dict__["free_displacement"] = solved.free_displacement.ravel()  # K⁻¹P, known
+    solution = Solution(solved.u_free.ravel(), tiled_rows(solved.contact_force, walls),
+                        prepared.method, int(solved.iterations.max(initial=0)),
+                        "solved with the batch")
+    together = make_result(model, solution, method=prepared.method, contact=prepared.contact,
+                           options=prepared.result_options, timings={})
+    F, U = case_scales(model, cases, solved.free_displacement, gap_cases)
+    lam = solved.contact_force
+    residuals = {}
+    for name, value in together.residuals.items():
+        scale = together.displacement_scale / U if name == "displacement" else (
+            together.force_scale / F)
+        residuals[name] = np.full(cases, np.nan) if value is None else value * scale
+    verified = solved.settled & np.all(
+        [residuals[name] <= SPARE * getattr(TOLERANCES, name) for name, value
+         in together.residuals.items() if value is not None], axis=0)
+    physical = lam.min(axis=1, initial=0.0) >= -TOLERANCES.sign * F
+    alone, failures = {}, {}
+    for case in np.flatnonzero(~verified).tolist():
+        own = None if not solved.settled[case] else _checked_alone(
+            prepared, loads, gaps, case, solved.u_free[case], lam[case], prepared.method,
+            int(solved.iterations[case]))
+        if own is None or not own.verified:
+            try:
+                own = _alone(prepared, loads, gaps, case)
+            except SolverError as error:  # the batch's answer stays, flagged
+                failures[case] = str(error)
+                if own is None:
+                    own = _checked_alone(prepared, loads, gaps, case, solved.u_free[case],
+                                         lam[case], prepared.method,
+                                         int(solved.iterations[case]))
+        alone[case] = own
+    batch = Batch(prepared, loads, gaps, np.array(together.u).reshape(cases, -1), lam.copy(),
+                  np.array(together.reactions).reshape(cases, -1),
+                  per_case_rows(together.penetration, walls, cases), verified, physical,
+                  residuals, np.full(cases, together.force_error_bound),
+                  np.full(cases, together.displacement_error_bound), F, U,
+                  solved.iterations, prepared.method, alone, failures)
+    for case, result in alone.items():
+        _take(batch, case, result)
+    object.__setattr__(batch, "time", time.perf_counter() - start)
+    return batch
+
+
+def _case_scene(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,
+                case: int) -> Scene:
+    """Case ``case``'s scene; for bad values the error a single case gives, naming the case."""
+    try:
+        return prepared.scene.with_values(None if loads is None else loads[case],
+                                          None if gaps is None else gaps[case])
+    except ContactqpError as error:
+        raise type(error)(f"case {case}: {error}") from None
+
+
+def _checked_alone(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,
+                   case: int, u_free: np.ndarray, contact_force: np.ndarray, solver: str,
+                   iterations: int) -> Result:
+    """Case ``case``'s Result for the batch's answer (``u_free`` at the free nodes), checked
+    alone."""
+    scene = _case_scene(prepared, loads, gaps, case)
+    model = (prepared.model if scene is prepared.scene
+             else prepared.model.with_layout(scene.layout))
+    solution = Solution(u_free, contact_force, solver, iterations, "solved with the batch",
+                        info={"batch": "every case at once"})
+    return make_result(model, solution, method=prepared.method, contact=prepared.contact,
+                       options=prepared.result_options, timings={})
+
+
+def _alone(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,
+           case: int) -> Result:
+    """Case ``case`` solved on its own (:meth:`Prepared.solve`); bad values name the case."""
+    scene = _case_scene(prepared, loads, gaps, case)
+    return prepared.solve_scene(scene)
+
+
+def _values(values: np.ndarray | None, own: np.ndarray, cases: int) -> np.ndarray:
+    return np.broadcast_to(own, (cases, own.size)) if values is None else values
+
+
+def _penalty(prepared: Prepared) -> float | None:
+    """ε for the penalty (its default, as the single-case method takes it), None for
+    Lagrange multipliers."""
+    if prepared.method != "penalty":
+        return None
+    from contactqp.methods.penalty import default_penalty
+
+    penalty = prepared.options.get("penalty")
+    return default_penalty(prepared.model) if penalty is None else penalty
+
+
+def _take(batch: Batch, case: int, result: Result) -> None:
+    """Case ``case``'s row of every array from its own Result."""
+    for name in ("u", "contact_force", "reactions", "penetration"):
+        getattr(batch, name)[case] = getattr(result, name)
+    batch.verified[case], batch.physical[case] = result.verified, result.physical
+    for name, value in result.residuals.items():
+        batch.residuals[name][case] = np.nan if value is None else value
+    batch.force_error_bound[case] = result.force_error_bound
+    batch.displacement_error_bound[case] = result.displacement_error_bound
+    batch.force_scale[case] = result.force_scale
+    batch.displacement_scale[case] = result.displacement_scale
+    batch.iterations[case] = result.iterations or 0
+
+
+def _case_by_case(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,
+                  cases: int, start: float) -> Batch:
+    results = {case: _alone(prepared, loads, gaps, case) for case in range(cases)}
+
+    def stack(name: str, dtype: Any = float) -> np.ndarray:
+        return np.array([getattr(results[case], name) for case in range(cases)], dtype=dtype)
+
+    names = results[0].residuals
+    residuals = {name: np.array([np.nan if results[case].residuals[name] is None
+                                 else results[case].residuals[name] for case in range(cases)])
+                 for name in names}
+    iterations = np.array([results[case].iterations or 0 for case in range(cases)])
+    return Batch(prepared, loads, gaps, stack("u"), stack("contact_force"), stack("reactions"),
+                 stack("penetration"), stack("verified", bool), stack("physical", bool),
+                 residuals, stack("force_error_bound"), stack("displacement_error_bound"),
+                 stack("force_scale"), stack("displacement_scale"), iterations,
+                 results[0].solver, results, time.perf_counter() - start)
+
+
+__all__ = ["Batch", "case_scales", "solve_batch", "tiled_scene"]
