@@ -84,3 +84,24 @@ def test_two_bar_contacts_from_supported_ends_to_one_node_are_refused():
         Scene((BAR, BAR, BAR), (Support(0, 0), Support(2, 1), Support(0, 2)), (),
               (Wall(0, 0.0, "+", 1),),
               contacts=(BarContact(2, 0, 1, 0, 0.0), BarContact(0, 0, 1, 0, 0.0)))
+
+
+def test_two_zero_gap_loops_that_share_a_row_are_refused():
+    """Random scene (seed 150610, every gap 0): bar 1's node 1 held at u <= 0 by a wall; a bar
+    contact ties bar 0's node 1 (a wall holds it at u >= 0) to it, and another ties bar 0's
+    supported node 0 to it. Each loop through the wall runs one way round, but together they
+    let a force go round the wall, the two contacts and the other wall with the first wall
+    free (rows facing both ways): the penalty and the reference split it 5.3e5 N apart, both
+    verified, the same on every node."""
+    with pytest.raises(contactqp.SceneError, match="more than one way") as refused:
+        Scene((BAR, BAR), (Support(0, 0), Support(0, 1)), (),
+              (Wall(1, 0.0, "-", 0), Wall(1, 0.0, "+", 1)),
+              contacts=(BarContact(0, 1, 1, 1, 0.0), BarContact(0, 0, 1, 1, 0.0)))
+    assert "wall[0]" in str(refused.value) and "contact[1]" in str(refused.value)
+
+
+def test_two_zero_gap_loops_apart_are_a_scene():
+    """The same with the second contact given a gap: one loop is left, one way round."""
+    Scene((BAR, BAR), (Support(0, 0), Support(0, 1)), (),
+          (Wall(1, 0.0, "-", 0), Wall(1, 0.0, "+", 1)),
+          contacts=(BarContact(0, 1, 1, 1, 0.0), BarContact(0, 0, 1, 1, 1e-4)))

@@ -174,8 +174,9 @@ def yield_warning(layout: Layout, stress: np.ndarray) -> tuple[float | None, lis
     e = int(np.nanargmax(np.abs(stress) / yield_stress))
     where = f"element {e}"
     if len(scene.bars) > 1:
-        bar = int(np.searchsorted(np.cumsum([b.n_elements for b in scene.bars]), e, "right"))
-        where = f"bar[{bar}] element {e - sum(b.n_elements for b in scene.bars[:bar])}"
+        start = int(layout.elements[0][e])  # the element's first node, in global numbering
+        bar = int(layout.node_bar[start])
+        where = f"bar[{bar}] element {start - int(layout.node_offsets[bar])}"
     megapascal = scene.unit.pascal / 1e6  # MPa is a unit of SI and of mm-N-MPa alike
     warning = (f"stress beyond yield: {where} carries {stress[e] * megapascal:.1f} MPa, "
                f"{ratio:.2f} x the yield stress {yield_stress[e] * megapascal:.0f} MPa (a "

@@ -24,7 +24,8 @@ import numpy as np
 from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
 from contactqp.model import Model
 
-CASES_ROWS = 64  # contact rows up to which the cases are solved together (W is rows x rows)
+CASES_ROWS = 64  # contact rows up to which the cases are solved together (W is rows x rows;
+# a case's set of held rows is one 64-bit key)
 CASES_ENTRIES = 2**22  # ... and free nodes x rows, the dense K⁻¹Cᵀ it builds (32 MB)
 
 
@@ -104,9 +105,11 @@ def _held_forces(W: np.ndarray, soft: float, q: np.ndarray,
     of held rows; and whether each case's system was singular (its λ left 0)."""
     lam = np.zeros(q.shape)
     singular = np.zeros(q.shape[0], dtype=bool)
-    sets, which = np.unique(active, axis=0, return_inverse=True)
-    which = which.reshape(-1)
-    for index, held in enumerate(sets):
+    # each case's set as one integer (rows <= 64), so that finding the sets sorts numbers
+    keys = np.packbits(active, axis=1, bitorder="little")
+    keys = np.pad(keys, ((0, 0), (0, 8 - keys.shape[1]))).view(np.uint64).reshape(-1)
+    _, first, which = np.unique(keys, return_index=True, return_inverse=True)
+    for index, held in enumerate(active[first]):
         if not held.any():
             continue
         members = np.flatnonzero(which == index)

@@ -150,8 +150,8 @@ class Model:
         """Displacements of every node, zero at the supports."""
         supports = np.sort(self.layout.support_nodes)
         # np.insert puts each zero before the free node that follows the support
-        return np.insert(np.asarray(u_free, dtype=float),
-                         [node - i for i, node in enumerate(supports)], 0.0)
+        return np.insert(np.asarray(u_free, dtype=float), supports - np.arange(supports.size),
+                         0.0)
 
 
 def displacement_scale(free_displacement: np.ndarray, g: np.ndarray, layout: Layout) -> float:
