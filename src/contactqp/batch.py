@@ -41,7 +41,6 @@ from contactqp.scene import Scene
 if TYPE_CHECKING:
     from contactqp.prepared import Prepared
 
-VECTORISED = ("lagrange", "penalty")  # methods solved for every case at once
 SPARE = 0.999  # a case verified together has its residuals within this × the tolerances
 
 
@@ -153,8 +152,7 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
     solved and checked (module docstring)."""
     start = time.perf_counter()
     scene = prepared.scene
-    if not (prepared.method in VECTORISED and prepared.formulation in ("full", "condensed")
-            and many.fits(prepared.model) and prepared.options.get("active_set") != "passed"):
+    if not prepared.together:
         return _case_by_case(prepared, loads, gaps, cases, start)
     tiled = prepared.tiled(cases)
     tiled_loads, tiled_gaps = tiled_values(scene, _values(loads, prepared.scene_loads, cases),
@@ -170,8 +168,9 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
     walls = len(scene.walls)
     gap_cases = per_case_rows(model.g, walls, cases)
     solved = many.solve_cases(prepared.model, prepared.contact, model.P.reshape(cases, -1),
-                              gap_cases, penalty=_penalty(prepared),
-                              max_iterations=prepared.options.get("max_iterations"))
+                              gap_cases, penalty=prepared.penalty,
+                              max_iterations=prepared.options.get("max_iterations"),
+                              shared=prepared.flexibility)
     model.__dict__["free_displacement"] = solved.free_displacement.ravel()  # K⁻¹P, known
     solution = Solution(solved.u_free.ravel(), tiled_rows(solved.contact_force, walls),
                         prepared.method, int(solved.iterations.max(initial=0)),
@@ -249,17 +248,6 @@ def _alone(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None
 
 def _values(values: np.ndarray | None, own: np.ndarray, cases: int) -> np.ndarray:
     return np.broadcast_to(own, (cases, own.size)) if values is None else values
-
-
-def _penalty(prepared: Prepared) -> float | None:
-    """ε for the penalty (its default, as the single-case method takes it), None for
-    Lagrange multipliers."""
-    if prepared.method != "penalty":
-        return None
-    from contactqp.methods.penalty import default_penalty
-
-    penalty = prepared.options.get("penalty")
-    return default_penalty(prepared.model) if penalty is None else penalty
 
 
 def _take(batch: Batch, case: int, result: Result) -> None:

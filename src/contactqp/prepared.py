@@ -22,7 +22,7 @@ import numpy as np
 from contactqp.batch import Batch, solve_batch, tiled_scene
 from contactqp.errors import OptionError
 from contactqp.feasibility import equality_conflict
-from contactqp.methods import Method
+from contactqp.methods import Method, cases
 from contactqp.model import Model, build_model
 from contactqp.model.layout import TOPOLOGY
 from contactqp.result import Result, make_result
@@ -50,7 +50,7 @@ class Prepared:
     options: dict[str, Any]
     model: Model
     spec: Method = field(repr=False)
-    _tiled: dict[str, Any] = field(default_factory=dict, repr=False)
+    _kept: dict[str, Any] = field(default_factory=dict, repr=False)  # made on first use
 
     @property
     def n_loads(self) -> int:
@@ -84,6 +84,35 @@ class Prepared:
         return make_result(model, solution, method=self.method, contact=self.contact,
                            options=self.result_options,
                            timings={"build": built - start, "solve": solved - built})
+
+    @property
+    def together(self) -> bool:
+        """Whether a batch's cases are solved together on the contact rows with the
+        flexibility W formed once (:mod:`contactqp.methods.cases`): Lagrange multipliers and
+        the penalty, in the full or condensed formulation (the same answer), with few contact
+        rows."""
+        return (self.method in ("lagrange", "penalty")
+                and self.formulation in ("full", "condensed") and cases.fits(self.model)
+                and self.options.get("active_set") != "passed")
+
+    @property
+    def flexibility(self) -> tuple[np.ndarray, np.ndarray]:
+        """(K⁻¹Cᵀ, W = C K⁻¹ Cᵀ) of the scene (:func:`contactqp.methods.cases.flexibility`),
+        formed on first use."""
+        if "flexibility" not in self._kept:
+            self._kept["flexibility"] = cases.flexibility(self.model)
+        return self._kept["flexibility"]
+
+    @property
+    def penalty(self) -> float | None:
+        """The penalty's ε as its method takes it (its option, else its default); None for
+        any other method."""
+        if self.method != "penalty":
+            return None
+        from contactqp.methods.penalty import default_penalty
+
+        given = self.options.get("penalty")
+        return default_penalty(self.model) if given is None else given
 
     def solve_many(self, loads: Any = None, gaps: Any = None) -> Batch:
         """Every case of ``loads`` (cases x :attr:`n_loads`) and ``gaps`` (cases x
@@ -120,14 +149,13 @@ class Prepared:
     def tiled(self, cases: int) -> Model:
         """The model of the scene repeated ``cases`` times (:func:`contactqp.batch.tiled_scene`),
         made once per number of cases (the last one kept)."""
-        kept = self._tiled
+        kept = self._kept
         if kept.get("cases") != cases:
-            kept.clear()
             model = build_model(tiled_scene(self.scene, cases))
             for name in TOPOLOGY:  # made here once, shared by every batch's layout
                 getattr(model.layout, name)
-            kept.update(cases=cases, model=model)
-        return kept["model"]
+            kept.update(cases=cases, tiled=model)
+        return kept["tiled"]
 
 
 def prepare(scene: Scene | str | None = None, method: str = "lagrange",
@@ -138,6 +166,8 @@ def prepare(scene: Scene | str | None = None, method: str = "lagrange",
     them: the options are checked, the scene laid out and its model built once."""
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
     model = build_model(scene)
+    for name in TOPOLOGY:  # made once here, shared by every case's layout
+        getattr(model.layout, name)
     return Prepared(scene, method, contact, chosen_formulation(model, spec, formulation, contact),
                     options, model, spec)
 

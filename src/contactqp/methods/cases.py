@@ -46,15 +46,21 @@ class CasesSolution:
     free_displacement: np.ndarray
 
 
+def flexibility(model: Model) -> tuple[np.ndarray, np.ndarray]:
+    """(K⁻¹Cᵀ, free nodes x rows; W = C K⁻¹ Cᵀ, rows x rows): what every case shares."""
+    columns = model.solve_K(model.C.T.toarray())
+    W = model.C @ columns
+    return columns, 0.5 * (W + W.T)
+
+
 def solve_cases(model: Model, contact: str, loads: np.ndarray, gaps: np.ndarray, *,
-                penalty: float | None = None,
-                max_iterations: int | None = None) -> CasesSolution:
+                penalty: float | None = None, max_iterations: int | None = None,
+                shared: tuple[np.ndarray, np.ndarray] | None = None) -> CasesSolution:
     """Every case of ``loads`` (cases x free nodes, the nodal loads P) and ``gaps`` (cases x
-    rows): by Lagrange multipliers (``penalty`` None) or the penalty ε (module docstring)."""
+    rows): by Lagrange multipliers (``penalty`` None) or the penalty ε (module docstring).
+    ``shared``: :func:`flexibility` of the model, when the caller keeps it."""
     C = model.C
-    flexibility_columns = model.solve_K(C.T.toarray())  # K⁻¹Cᵀ, free nodes x rows
-    W = C @ flexibility_columns
-    W = 0.5 * (W + W.T)
+    flexibility_columns, W = flexibility(model) if shared is None else shared
     u_free = model.solve_K(loads.T).T  # K⁻¹P of every case
     q = (C @ u_free.T).T - gaps
     cases, rows = q.shape
@@ -105,10 +111,11 @@ def _held_forces(W: np.ndarray, soft: float, q: np.ndarray,
     of held rows; and whether each case's system was singular (its λ left 0)."""
     lam = np.zeros(q.shape)
     singular = np.zeros(q.shape[0], dtype=bool)
-    # each case's set as one integer (rows <= 64), so that finding the sets sorts numbers
-    keys = np.packbits(active, axis=1, bitorder="little")
-    keys = np.pad(keys, ((0, 0), (0, 8 - keys.shape[1]))).view(np.uint64).reshape(-1)
-    _, first, which = np.unique(keys, return_index=True, return_inverse=True)
+    if q.shape[0] == 1:
+        first, which = np.zeros(1, dtype=np.intp), np.zeros(1, dtype=np.intp)
+    else:  # each case's set as one integer (rows <= 64), so that finding the sets sorts numbers
+        keys = active @ np.left_shift(np.uint64(1), np.arange(q.shape[1], dtype=np.uint64))
+        _, first, which = np.unique(keys, return_index=True, return_inverse=True)
     for index, held in enumerate(active[first]):
         if not held.any():
             continue
@@ -120,11 +127,12 @@ def _held_forces(W: np.ndarray, soft: float, q: np.ndarray,
         except np.linalg.LinAlgError:
             singular[members] = True
             continue
-        if np.linalg.cond(system) > 1.0 / (64.0 * np.finfo(float).eps):  # dependent rows
+        if rows.size > 1 and np.linalg.cond(system) > 1.0 / (64.0 * np.finfo(float).eps):
+            # dependent rows (one row alone never is: W_ii is the compliance at the row)
             singular[members] = True
             continue
         lam[np.ix_(members, rows)] = forces
     return lam, singular
 
 
-__all__ = ["CASES_ENTRIES", "CASES_ROWS", "CasesSolution", "fits", "solve_cases"]
+__all__ = ["CASES_ENTRIES", "CASES_ROWS", "CasesSolution", "fits", "flexibility", "solve_cases"]
