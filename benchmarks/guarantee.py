@@ -6,7 +6,8 @@ reference.
 Scenes come from contactqp.random_scenes (one to three bars, areas over five decades, zero
 gaps, press fits, walls on both sides, bar contacts, distributed loads). Each is solved by
 every method in every formulation it takes (lagrange full/condensed/strain, penalty at its
-default ε and at the textbook 1e14 N/m, augmented full/condensed) and by every installed QP
+default ε and at the textbook 1e14 N/m, augmented full/condensed, lemke, pgs at ω = 1 and
+1.5, semismooth_newton on min and Fischer–Burmeister) and by every installed QP
 backend and solver (formulation, accuracy and scaling drawn per scene). Each run is compared
 with contactqp.reference and classed:
 
@@ -45,7 +46,9 @@ def runs(rng: np.random.Generator) -> list[tuple[str, dict, str]]:
     out = [("lagrange", {}, f) for f in ("full", "condensed", "strain")]
     out += [("penalty", {}, f) for f in ("full", "condensed")]
     out += [("penalty", {"penalty": 1e14}, "full"), ("augmented", {}, "full"),
-            ("augmented", {}, "condensed")]
+            ("augmented", {}, "condensed"), ("lemke", {}, "full"), ("pgs", {}, "full"),
+            ("pgs", {"relaxation": 1.5}, "full"), ("semismooth_newton", {}, "full"),
+            ("semismooth_newton", {"ncp": "fischer-burmeister"}, "full")]
     for info in contactqp.available_qp_solvers():
         if info.available:
             out.append(("qp", {"backend": info.backend, "solver": info.solver,
@@ -82,7 +85,8 @@ def main(scenes: int, seed: int, out: Path | None = None) -> int:
         scene = random_scene(rng)
         exact = reference(scene)
         for method, options, formulation in runs(rng):
-            label = "/".join([method, *(str(options[k]) for k in ("backend", "solver")
+            label = "/".join([method, *(str(options[k]) for k in ("backend", "solver",
+                                                                  "relaxation", "ncp")
                                         if k in options)])
             try:
                 with warnings.catch_warnings():

@@ -1,7 +1,7 @@
 """The benchmarks, one entry point: named groups of cases, each measured against a floor from
 the same run (one banded factor-and-solve of K) and, where it has one, an exact reference.
 
-    python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,loop,guarantee]
+    python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,loop,lcp,guarantee]
                              [--quick] [--out DIR] [--scenes N] [--seed S]
     python benchmarks/run.py --check DIR       # is a matrix output folder complete? (CI)
 
@@ -16,6 +16,8 @@ the same run (one banded factor-and-solve of K) and, where it has one, an exact 
                (benchmarks/groups.py)
     loop       the library call in a user's loop: one solve and many load cases of the default
                scene against hand-written numpy doing the same job (benchmarks/loop.py)
+    lcp        the complementarity methods (lemke, pgs/psor, semismooth newton): iterations
+               against the mesh and the stiffness contrast (benchmarks/lcp.py)
     guarantee  does verified mean right? every method on --scenes random scenes against the
                exact reference (benchmarks/guarantee.py)
 
@@ -32,10 +34,11 @@ from pathlib import Path
 import contacts
 import groups
 import guarantee
+import lcp
 import loop
 import matrix
 
-CASES = ("matrix", "taper", "walls", "contacts", "overhead", "loop", "guarantee")
+CASES = ("matrix", "taper", "walls", "contacts", "overhead", "loop", "lcp", "guarantee")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -68,6 +71,8 @@ def main(argv: list[str] | None = None) -> int:
             contacts.main(args.quick, out / "contacts")
         elif name == "loop":
             loop.main(args.quick, out / "loop")
+        elif name == "lcp":
+            lcp.main(args.quick, out / "lcp")
         elif name == "guarantee":
             scenes = min(args.scenes, 100) if args.quick else args.scenes
             status |= guarantee.main(scenes, args.seed, out / "guarantee")

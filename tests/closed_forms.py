@@ -363,6 +363,10 @@ def runs(rng: np.random.Generator) -> list[tuple[str, dict, str]]:
     out = [("lagrange", {}, f) for f in ("full", "condensed", "strain")]
     out += [("penalty", {}, f) for f in ("full", "condensed")]
     out += [("augmented", {}, f) for f in ("full", "condensed")]
+    out += [("lemke", {}, str(rng.choice(["full", "condensed"]))),
+            ("pgs", {"relaxation": float(rng.choice([1.0, 1.5]))}, "full"),
+            ("semismooth_newton", {"ncp": str(rng.choice(["min", "fischer-burmeister"]))},
+             str(rng.choice(["full", "condensed"])))]
     for backend, solver in QP_PAIRS:
         out.append(("qp", {"backend": backend, "solver": solver,
                            "accuracy": str(rng.choice(["default", "high"])),

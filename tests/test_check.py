@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 import contactqp
 from closed_forms import (
     HAND_GAP,
+    default_compliance,
     hand_scene,
 )
 from contactqp import (
@@ -175,3 +176,25 @@ def test_section_residual_is_the_largest_cut(case):
     expected = np.abs(sections).max()
     assert section_residual(np.array(forces), nodes, values) == pytest.approx(
         expected, rel=1e-12, abs=1e-9)
+
+
+@pytest.mark.parametrize("times", [10.0, 1e3, 1e6])
+def test_the_natural_map_residual_of_the_penalty_is_its_closed_form(times):
+    """One wall, penalty ε = k·s (s = 1/f₄ the stiffness the tip sees): the penetration is
+    λ/ε with λ = (u_free − g)/(f₄ + 1/ε), so the scaled LCP's natural-map residual,
+    |min(λ√f₄, −p/√f₄)| / |(g − u_free)/√f₄| = p / (u_free − g), is 1/(1 + k); and it is the
+    same in mm as in m (the rows are scaled to a unit diagonal)."""
+    stiffness = 1.0 / default_compliance(4)
+    result = contactqp.solve(None, "penalty", penalty=times * stiffness)
+    assert result.residuals["natural_map"] == pytest.approx(1.0 / (1.0 + times), rel=1e-6)
+    in_mm = contactqp.convert_units(contactqp.default_scene(), "mm-N-MPa")
+    result_mm = contactqp.solve(in_mm, "penalty", penalty=times * stiffness / 1e3)  # N/mm
+    assert result_mm.residuals["natural_map"] == pytest.approx(
+        result.residuals["natural_map"], rel=1e-9)
+    assert result.verified == (times >= 1e6)  # reported beside the check, not part of it
+
+
+def test_the_natural_map_residual_is_round_off_for_exact_answers_and_none_for_equality():
+    assert contactqp.solve().residuals["natural_map"] <= 1e-15
+    assert contactqp.solve(hand_scene(), "lemke").residuals["natural_map"] <= 1e-15
+    assert contactqp.solve(contact="equality").residuals["natural_map"] is None

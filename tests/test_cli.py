@@ -313,3 +313,18 @@ def test_curve_cli_table_and_chart(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "first contact closes at t = 0.0703" in out
     assert (tmp_path / "load_path.png").stat().st_size > 0
+
+
+def test_the_complementarity_options_reach_their_methods(capsys):
+    """--relaxation, --max-iterations: one PSOR sweep on the default scene is not the answer
+    (exit 1, flagged); --ncp picks Newton's NCP function (the Result says which)."""
+    code, out, _ = run(capsys, "solve", "--method", "pgs", "--relaxation", "1.5",
+                       "--max-iterations", "1", "--json")
+    data = json.loads(out)
+    assert code == 1 and data["info"]["relaxation"] == 1.5 and data["iterations"] == 1
+    assert data["verified"] is False
+    code, out, _ = run(capsys, "solve", "--method", "semismooth_newton", "--ncp",
+                       "fischer-burmeister", "--json")
+    assert code == 0 and json.loads(out)["info"]["ncp"] == "fischer-burmeister"
+    code, _, err = run(capsys, "solve", "--method", "pgs", "--relaxation", "2.5")
+    assert code == 2 and "relaxation must be in (0, 2)" in err

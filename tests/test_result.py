@@ -36,10 +36,11 @@ def test_result_to_json(method, contact):
     assert data["penetration"] == result.penetration.tolist()
     assert data["verified"] is result.verified is True
     assert set(data["residuals"]) == {"equilibrium", "feasibility", "complementarity", "sign",
-                                      "force", "displacement"}
+                                      "force", "displacement", "natural_map"}
     assert data["force_error_bound"] == result.force_error_bound
     if contact == "equality":
         assert data["residuals"]["complementarity"] is None
+        assert data["residuals"]["natural_map"] is None
     assert isinstance(data["time"], float) and data["time"] >= 0.0
     assert data == result.to_dict()
 

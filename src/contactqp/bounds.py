@@ -217,17 +217,23 @@ def _count_at_or_before(n_nodes: int, held: np.ndarray, nodes: np.ndarray) -> np
 def _contact_give(layout: Layout, held: np.ndarray, pushing: np.ndarray) -> float:
     """The largest 1/(s_a + s_b) (m/N) over the pushing bar contacts: how far a unit force
     error moves the two ends of a contact together, s_a and s_b the stiffness each end sees
-    in its own bar with the other held nodes fixed (a supported end does not move)."""
+    in its own bar with the held nodes fixed, but the ends of every pushing bar contact (a
+    supported end does not move). Another contact's ends are not fixed: they move with it,
+    and where a stiff stretch of bar joins two contacts the pairs move as one (measured: the
+    augmented method on a random scene, two contacts joined by elements of 1e10 N/m, the four
+    ends moved 4.6e-13 m together against a bound of 1.2e-15 m that held each pair by the
+    other's ends)."""
     n_walls = len(layout.scene.walls)
+    pairs = [np.array([layout.node(c.bar_a, c.node_a), layout.node(c.bar_b, c.node_b)])
+             for i, c in enumerate(layout.scene.contacts) if pushing[n_walls + i]]
+    if not pairs:
+        return 0.0
+    others = np.setdiff1d(held, np.concatenate(pairs))
     give = 0.0
-    for i, c in enumerate(layout.scene.contacts):
-        if not pushing[n_walls + i]:
-            continue
-        ends = np.array([layout.node(c.bar_a, c.node_a),
-                         layout.node(c.bar_b, c.node_b)])
+    for ends in pairs:
         if np.isin(ends, layout.support_nodes).any():
             continue
-        stiffness = seen_stiffness(layout, np.setdiff1d(held, ends), ends)
+        stiffness = seen_stiffness(layout, others, ends)
         give = max(give, 1.0 / float(stiffness.sum()))
     return give
 

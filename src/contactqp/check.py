@@ -47,9 +47,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from contactqp.bounds import error_bounds
+from contactqp.bounds import error_bounds, row_stiffness
 from contactqp.errors import OptionError
-from contactqp.model import Layout, Model, build_model, element_forces, largest, link_forces
+from contactqp.model import (
+    Layout,
+    Model,
+    build_model,
+    element_forces,
+    largest,
+    link_forces,
+    node_set,
+    penetration,
+)
 from contactqp.scene import Scene
 
 
@@ -144,6 +153,8 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
         for name, value in residuals.items()
         if value is not None and not value <= getattr(tolerances, name)
     ]
+    residuals["natural_map"] = None if contact == "equality" else float(natural_map(
+        lam, -penetration(layout, u), free_gaps(model), row_compliance_roots(layout)))
     pulling = float(np.max(-lam, initial=0.0)) / F
     physical = pulling <= tolerances.sign
     notes = list(failures)
@@ -153,6 +164,37 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
         notes.append(f"non-physical: a wall pulls the bar ({which}); a rigid wall can only push")
     return Check(residuals, not failures, physical, "; ".join(notes),
                  bounds.force_error_bound, bounds.displacement_error_bound, F, U)
+
+
+def natural_map(forces: np.ndarray, gaps: np.ndarray, free: np.ndarray,
+                roots: np.ndarray | None = None) -> float | np.ndarray:
+    """The natural-map residual of the contact LCP (Siconos's measure, not part of
+    ``verified``): ‖min(z, w)‖∞ / ‖q‖∞ (min(z, w) = z − (z − w)₊), z the contact forces, w the
+    gaps they leave and q the gaps with no contact force. With ``roots`` r (√ of the compliance
+    each row sees with the supports held, :func:`row_compliance_roots`) each row is scaled as
+    the LCP scaled to a unit diagonal is, z = λ·r, w/r, q/r, so that the number is the same in
+    every unit system. Over the last axis (one value per case for cases x rows)."""
+    if roots is not None:  # λ = D z and D w, D = diag(W)^-½ = 1/roots
+        forces, gaps, free = forces * roots, gaps / roots, free / roots
+    with np.errstate(invalid="ignore"):
+        top = np.nanmax(np.abs(np.minimum(forces, gaps)), axis=-1, initial=0.0)
+        size = np.nanmax(np.abs(free), axis=-1, initial=0.0)
+    return top / np.where(size > 0.0, size, 1.0)
+
+
+def free_gaps(model: Model) -> np.ndarray:
+    """q = g − C K⁻¹P: the gap of every row with no contact force (m)."""
+    return -penetration(model.layout, model.full_displacements(model.free_displacement))
+
+
+def row_compliance_roots(layout: Layout) -> np.ndarray:
+    """√(1/s) per row, s the stiffness the row sees with the supports held
+    (:func:`contactqp.bounds.row_stiffness`; a bar contact's two ends in series); NaN where a
+    row sees no stiffness or an infinite one (it is left out of :func:`natural_map`)."""
+    s = row_stiffness(layout, node_set(layout.n_nodes, layout.support_nodes),
+                      np.zeros(layout.n_contacts, dtype=bool))
+    usable = np.isfinite(s) & (s > 0.0)
+    return np.where(usable, 1.0 / np.sqrt(np.where(usable, s, 1.0)), np.nan)
 
 
 def _shape(name: str, values: np.ndarray, size: int) -> None:
@@ -174,6 +216,7 @@ def _failed(contact: str, lam: np.ndarray, F: float, U: float,
     residuals = {name: (None if name in skip else math.inf) for name in names}
     notes = [f"{name} residual inf > {getattr(tolerances, name):.0e}"
              for name, value in residuals.items() if value is not None]
+    residuals["natural_map"] = None if contact == "equality" else math.inf
     physical = bool(np.isfinite(lam).all()) and float(np.max(-lam, initial=0.0)) <= (
         tolerances.sign * F)
     if not physical:

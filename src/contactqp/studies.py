@@ -47,7 +47,9 @@ def method_runs(scene: Scene | None = None) -> list[tuple[str, dict]]:
     metre = 1.0 if scene is None else scene.unit.metre
     runs: list[tuple[str, dict]] = [("lagrange", {}), ("penalty", {}),
                                     ("penalty", {"penalty": TEXTBOOK_PENALTY * metre}),
-                                    ("augmented", {})]
+                                    ("augmented", {}), ("lemke", {}), ("pgs", {}),
+                                    ("pgs", {"relaxation": 1.5}), ("semismooth_newton", {}),
+                                    ("semismooth_newton", {"ncp": "fischer-burmeister"})]
     for info in available_qp_solvers():
         if info.available:
             runs.append(("qp", {"backend": info.backend, "solver": info.solver}))
@@ -55,9 +57,11 @@ def method_runs(scene: Scene | None = None) -> list[tuple[str, dict]]:
 
 
 def run_label(method: str, options: dict) -> str:
-    """e.g. 'lagrange', 'penalty', 'penalty ε=1e+14', 'qp/osqp/OSQP'."""
+    """e.g. 'lagrange', 'penalty', 'penalty ε=1e+14', 'pgs ω=1.5', 'qp/osqp/OSQP'."""
     if method == "penalty" and "penalty" in options:
         return f"penalty ε={options['penalty']:.0e}"
+    if method == "pgs" and "relaxation" in options:
+        return f"pgs ω={options['relaxation']:g}"
     return "/".join([method, *(str(v) for v in options.values() if v)])
 
 

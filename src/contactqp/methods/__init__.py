@@ -16,6 +16,12 @@ from typing import Any
 
 from contactqp.errors import OptionError
 from contactqp.methods.augmented import DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, solve_augmented
+from contactqp.methods.complementarity import (
+    NCP_FUNCTIONS,
+    solve_lemke,
+    solve_pgs,
+    solve_semismooth_newton,
+)
 from contactqp.methods.lagrange import ACTIVE_SETS, solve_lagrange
 from contactqp.methods.penalty import solve_penalty
 from contactqp.methods.qp import BACKENDS, solve_qp
@@ -48,6 +54,23 @@ def _text(name: str) -> Callable[[Any], str]:
 
 
 ITERATIONS = _or_none(lambda v: whole_number("max_iterations", v, 1, error=OptionError))
+
+
+def _steps(value: Any) -> int:
+    return whole_number("max_iterations", value, 1, error=OptionError)
+
+
+def _residual(value: Any) -> float:
+    return positive_number("tolerance", value, "natural-map residual, dimensionless",
+                           OptionError)
+
+
+def _relaxation(value: Any) -> float:
+    value = positive_number("relaxation", value, "ω, 1 for Gauss–Seidel", OptionError)
+    if not value < 2.0:
+        raise OptionError(f"relaxation must be in (0, 2) (projected SOR diverges beyond); got "
+                          f"{value!r}")
+    return value
 PENALTY = _or_none(lambda v: positive_number("penalty", v, "force per length, e.g. N/m",
                                              OptionError))
 
@@ -85,6 +108,17 @@ METHODS: dict[str, Method] = {
          "scale": lambda v: flag("scale", v, OptionError),
          "verbose": lambda v: flag("verbose", v, OptionError)},
         FORMULATIONS, "a QP solver, whose dual values are the contact forces"),
+    "lemke": Method("lemke", solve_lemke, {"max_iterations": ITERATIONS}, ("full", "condensed"),
+                    "the LCP in the contact forces by Lemke's pivoting (exact, finite)"),
+    "pgs": Method("pgs", solve_pgs,
+                  {"relaxation": _relaxation, "tolerance": _residual, "max_iterations": _steps},
+                  ("full", "condensed"),
+                  "the LCP by projected Gauss–Seidel (PSOR with relaxation ω), iterative"),
+    "semismooth_newton": Method(
+        "semismooth_newton", solve_semismooth_newton,
+        {"ncp": _choice("ncp", NCP_FUNCTIONS), "tolerance": _residual,
+         "max_iterations": _steps},
+        ("full", "condensed"), "the LCP by Newton on an NCP function (min or Fischer–Burmeister)"),
 }
 
 

@@ -26,13 +26,12 @@ from contactqp.methods._active_set import (
     active_set_loop,
     displacement_tolerance,
 )
-from contactqp.methods.lemke import lemke
+from contactqp.methods.complementarity import solve_lemke
 from contactqp.model import (
     Condensed,
     Model,
     element_forces,
     elongation_rows,
-    without_circulation,
 )
 from contactqp.result import Solution
 
@@ -220,16 +219,11 @@ LEMKE_ENTRIES = 2**24  # ... and free nodes x rows, the dense K⁻¹Cᵀ it buil
 
 
 def _by_lemke(model: Model | Condensed) -> tuple[np.ndarray, np.ndarray, int]:
-    """(u, λ, pivots): the contact forces by Lemke's method on W λ + q >= 0, λ >= 0,
-    complementary (:mod:`contactqp.methods.lemke`), W = C K⁻¹ Cᵀ and q = g − C K⁻¹P; then
-    u = K⁻¹(P − Cᵀλ), with any force carried round a loop of rows taken out
-    (:func:`contactqp.model.without_circulation`)."""
-    C = model.C
-    columns = linalg.solve(model.K, np.column_stack((model.P, C.T.toarray())), spd=True)
-    u_free, flexibility = columns[:, 0], columns[:, 1:]
-    lam, pivots = lemke(C @ flexibility, model.g - C @ u_free)
-    lam = without_circulation(model, lam)
-    return u_free - flexibility @ lam, lam, pivots
+    """(u, λ, pivots) by Lemke's method on the contact LCP
+    (:func:`contactqp.methods.complementarity.solve_lemke`, any force carried round a loop of
+    rows taken out)."""
+    solution = solve_lemke(model, "inequality")
+    return solution.u_free, solution.contact_force, solution.iterations
 
 
 def _strain_info(element_force: list[np.ndarray]) -> dict:

@@ -1,0 +1,152 @@
+"""The complementarity methods (contactqp.methods.complementarity): Lemke, PGS/PSOR and
+semismooth Newton on the LCP in the contact forces.
+
+Expected answers: the default scene's closed form, the exact reference (contactqp.reference:
+statics in extended precision or rational arithmetic, tested on its own in test_reference.py)
+on random scenes, and, for the natural-map residual, the LCP formed here from dense matrices.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import contactqp
+from closed_forms import DEFAULT_F, default_closed_form
+from contactqp.builders import flat_patch
+from contactqp.model import build_model
+from contactqp.random_scenes import random_scene
+from contactqp.reference import reference
+
+EXACT = [("lemke", {}), ("semismooth_newton", {"ncp": "min"}),
+         ("semismooth_newton", {"ncp": "fischer-burmeister"})]
+ITERATIVE = [("pgs", {}), ("pgs", {"relaxation": 1.5})]
+ALL = EXACT + ITERATIVE
+IDS = ["/".join([m, *map(str, o.values())]) for m, o in ALL]
+
+
+@pytest.mark.parametrize(("method", "options"), ALL, ids=IDS)
+@pytest.mark.parametrize("contact", ["inequality", "equality"])
+def test_the_default_scene_is_its_closed_form(method, options, contact):
+    """λ = (F f₂ − g) / f₄ for both contact kinds (the wall is reached)."""
+    u, lam = default_closed_form(contact=contact)
+    result = contactqp.solve(None, method, contact, **options)
+    assert result.verified
+    assert result.contact_force[0] == pytest.approx(lam, rel=1e-9)
+    np.testing.assert_allclose(result.u, u, rtol=0, atol=1e-9 * np.abs(u).max())
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 2**32 - 1))
+def test_lemke_and_newton_are_exact_where_lagrange_is(seed):
+    """Random single bars without the extra stiffness contrast (where Lagrange multipliers are
+    exact to round-off, test_guarantee.py): Lemke's pivots and Newton on min and on
+    Fischer–Burmeister reach the exact reference to round-off, verified."""
+    scene = random_scene(np.random.default_rng(seed), max_bars=1, contrast=False)
+    exact = reference(scene)
+    for method, options in EXACT:
+        result = contactqp.solve(scene, method, **options)
+        assert result.verified, (seed, method, options, result.message)
+        # round-off of the largest force (press fits can push far beyond F)
+        largest = max(result.force_scale, np.abs(exact.contact_force).max(initial=0.0))
+        assert np.abs(result.contact_force - exact.contact_force).max(initial=0.0) <= (
+            1e-9 * largest), (seed, method, options)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 2**32 - 1))
+def test_every_method_is_right_where_verified_and_reports_its_residual(seed):
+    """Random scenes with every family (several bars, bar contacts, walls on both sides, zero
+    gaps, stiff beside soft): a verified answer is within the guarantee of the exact
+    reference; and the natural-map residual the method stops on (of the LCP it formed) is the
+    one the check reports from the answer alone."""
+    scene = random_scene(np.random.default_rng(seed))
+    exact = reference(scene)
+    for method, options in ALL:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            result = contactqp.solve(scene, method, **options)
+        # the same measure, from the answer's u (the check) and from the LCP's W and q (the
+        # method): equal but for round-off in how each forms the gaps
+        reported, own = result.residuals["natural_map"], result.info["natural_map"]
+        assert abs(reported - own) <= 1e-3 * own + 1e-8, (seed, method, options)
+        if not result.verified:
+            continue
+        force_error = np.abs(result.contact_force - exact.contact_force).max(initial=0.0)
+        displacement_error = np.abs(result.u - exact.displacement).max()
+        assert force_error <= contactqp.GUARANTEE[0] * result.force_scale
+        assert displacement_error <= contactqp.GUARANTEE[1] * result.displacement_scale
+
+
+def test_pgs_stops_at_its_cap_and_is_flagged():
+    """A flat patch of 32 walls (95 % in contact): one sweep leaves the forces far off, and the
+    iterate is returned as it is, not claimed, and flagged by the check; its natural-map
+    residual is the one formed here from the dense W and q."""
+    scene = flat_patch(32)
+    result = contactqp.solve(scene, "pgs", max_iterations=1)
+    assert not result.claimed_success and "stopped after 1 sweeps" in result.status
+    assert not result.verified
+    model = build_model(scene)
+    K, C = model.K.toarray(), model.C.toarray()
+    W = C @ np.linalg.solve(K, C.T)
+    q = model.g - C @ np.linalg.solve(K, model.P)
+    r = 1.0 / np.sqrt(np.diag(W))  # the unit-diagonal scaling: z = λ/r... as D = diag(W)^-½
+    z, w = result.contact_force / r, (W @ result.contact_force + q) * r
+    expected = np.abs(np.minimum(z, w)).max() / np.abs(q * r).max()
+    assert result.residuals["natural_map"] == pytest.approx(expected, rel=1e-6)
+    assert expected > 1e-3
+
+
+@pytest.mark.parametrize("relaxation", [1.0, 1.5])
+def test_pgs_sweeps_grow_with_the_mesh(relaxation):
+    """The bar's condensed flexibility is far from diagonally dominant (each contact's
+    neighbours see most of its flexibility): on a flat patch Gauss–Seidel, and PSOR alike,
+    needs about twice the sweeps each time the mesh is refined (measured 103, 222, 443 at
+    ω = 1; PSOR takes more, not fewer, here), and still reaches the answer."""
+    runs = [contactqp.solve(flat_patch(n), "pgs", relaxation=relaxation) for n in (8, 16, 32)]
+    sweeps = [run.iterations for run in runs]
+    assert all(run.verified and run.claimed_success for run in runs)
+    assert 1.5 * sweeps[0] < sweeps[1] and 1.5 * sweeps[1] < sweeps[2]
+
+
+def test_semismooth_newton_on_min_takes_its_set_in_few_steps():
+    """Newton on min is the primal–dual active set: on the default scene the first step finds
+    the one wall, and the answer is exact."""
+    result = contactqp.solve(None, "semismooth_newton")
+    assert result.iterations == 1 and result.residuals["natural_map"] <= 1e-15
+    assert result.contact_force[0] == pytest.approx(default_closed_form()[1], rel=1e-12)
+
+
+def test_more_rows_than_the_dense_lcp_takes_is_a_clear_error():
+    scene = flat_patch(2100)
+    with pytest.raises(contactqp.SolverError, match="up to 2000 contact rows"):
+        contactqp.solve(scene, "lemke")
+
+
+@pytest.mark.parametrize(("options", "message"), [
+    ({"relaxation": 2.0}, r"relaxation must be in \(0, 2\)"),
+    ({"relaxation": 0.0}, "relaxation"),
+    ({"tolerance": -1.0}, "tolerance"),
+    ({"max_iterations": 0}, "max_iterations"),
+])
+def test_bad_pgs_options_are_one_clear_error(options, message):
+    with pytest.raises(contactqp.OptionError, match=message):
+        contactqp.solve(None, "pgs", **options)
+
+
+def test_a_bad_ncp_function_is_one_clear_error():
+    with pytest.raises(contactqp.OptionError, match="ncp must be one of min, fischer-burmeister"):
+        contactqp.solve(None, "semismooth_newton", ncp="fb")
+
+
+def test_the_default_load_is_carried_by_wall_and_support():
+    """Balance: the wall's force plus the support's reaction carry the load, for every
+    method (an independent sum, not the check's)."""
+    for method, options in ALL:
+        result = contactqp.solve(None, method, **options)
+        assert result.contact_force[0] - result.reactions[0] == pytest.approx(DEFAULT_F,
+                                                                               rel=1e-9)
