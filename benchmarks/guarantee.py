@@ -48,7 +48,8 @@ def runs(rng: np.random.Generator) -> list[tuple[str, dict, str]]:
     out += [("penalty", {"penalty": 1e14}, "full"), ("augmented", {}, "full"),
             ("augmented", {}, "condensed"), ("lemke", {}, "full"), ("pgs", {}, "full"),
             ("pgs", {"relaxation": 1.5}, "full"), ("semismooth_newton", {}, "full"),
-            ("semismooth_newton", {"ncp": "fischer-burmeister"}, "full")]
+            ("semismooth_newton", {"ncp": "fischer-burmeister"}, "full"),
+            ("nitsche", {}, "full")]
     for info in contactqp.available_qp_solvers():
         if info.available:
             out.append(("qp", {"backend": info.backend, "solver": info.solver,

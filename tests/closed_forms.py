@@ -15,6 +15,7 @@ from __future__ import annotations
 import copy
 import itertools
 import math
+from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
 
@@ -366,10 +367,33 @@ def runs(rng: np.random.Generator) -> list[tuple[str, dict, str]]:
     out += [("lemke", {}, str(rng.choice(["full", "condensed"]))),
             ("pgs", {"relaxation": float(rng.choice([1.0, 1.5]))}, "full"),
             ("semismooth_newton", {"ncp": str(rng.choice(["min", "fischer-burmeister"]))},
-             str(rng.choice(["full", "condensed"])))]
+             str(rng.choice(["full", "condensed"]))),
+            # walls at a bar's end only (any other scene is refused with the reason)
+            ("nitsche", {"theta": float(rng.choice([1.0, 0.0, -1.0])),
+                         "gamma0": float(10.0 ** rng.uniform(1.0, 8.0))}, "full")]
     for backend, solver in QP_PAIRS:
         out.append(("qp", {"backend": backend, "solver": solver,
                            "accuracy": str(rng.choice(["default", "high"])),
                            "scale": bool(rng.random() < 0.8)},
                     str(rng.choice(["full", "condensed", "strain"]))))
     return out
+
+
+def rebuilt(scene: contactqp.Scene, loads: np.ndarray, gaps: np.ndarray) -> contactqp.Scene:
+    """The scene with these values, built from its parts (independently of with_values)."""
+    n_point, n_walls = len(scene.loads), len(scene.walls)
+    return contactqp.Scene(
+        scene.bars, scene.supports,
+        tuple(replace(p, force=float(f)) for p, f in zip(scene.loads, loads[:n_point])),
+        tuple(replace(w, gap=float(g)) for w, g in zip(scene.walls, gaps[:n_walls])),
+        name=scene.name,
+        distributed=tuple(replace(q, intensity=float(f))
+                          for q, f in zip(scene.distributed, loads[n_point:])),
+        contacts=tuple(replace(c, gap=float(g)) for c, g in zip(scene.contacts, gaps[n_walls:])),
+        units=scene.units)
+
+
+def values(scene: contactqp.Scene) -> tuple[np.ndarray, np.ndarray]:
+    loads = np.array([p.force for p in scene.loads] + [q.intensity for q in scene.distributed])
+    gaps = np.array([w.gap for w in scene.walls] + [c.gap for c in scene.contacts])
+    return loads, gaps

@@ -8,7 +8,6 @@ contactqp.solve of that scene, or the default scene's closed form; never the bat
 from __future__ import annotations
 
 import warnings
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +16,15 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import contactqp
-from closed_forms import DEFAULT_F, DEFAULT_GAP, DEFAULT_LENGTHS, cantilever, default_areas
+from closed_forms import (
+    DEFAULT_F,
+    DEFAULT_GAP,
+    DEFAULT_LENGTHS,
+    cantilever,
+    default_areas,
+    rebuilt,
+    values,
+)
 from contactqp.batch import tiled_scene
 from contactqp.random_scenes import random_scene
 from contactqp.reference import reference
@@ -29,29 +36,11 @@ ROUND_OFF = 1e-12
 BOUND_FACTOR = 5.0  # as test_guarantee.py: the bounds are estimates to this factor
 
 
-def rebuilt(scene: contactqp.Scene, loads: np.ndarray, gaps: np.ndarray) -> contactqp.Scene:
-    """The scene with these values, built from its parts (independently of the batch)."""
-    n_point, n_walls = len(scene.loads), len(scene.walls)
-    return contactqp.Scene(
-        scene.bars, scene.supports,
-        tuple(replace(p, force=float(f)) for p, f in zip(scene.loads, loads[:n_point])),
-        tuple(replace(w, gap=float(g)) for w, g in zip(scene.walls, gaps[:n_walls])),
-        distributed=tuple(replace(q, intensity=float(f))
-                          for q, f in zip(scene.distributed, loads[n_point:])),
-        contacts=tuple(replace(c, gap=float(g)) for c, g in zip(scene.contacts, gaps[n_walls:])),
-        units=scene.units)
-
-
-def own_values(scene: contactqp.Scene) -> tuple[np.ndarray, np.ndarray]:
-    return (np.array([p.force for p in scene.loads] + [q.intensity for q in scene.distributed]),
-            np.array([w.gap for w in scene.walls] + [c.gap for c in scene.contacts]))
-
-
 def random_cases(rng: np.random.Generator, scene: contactqp.Scene,
                  cases: int) -> tuple[np.ndarray, np.ndarray]:
     """Loads scaled by −1.5..2 (signs flip: walls open, close and swap), gaps by 0..2 with one
     case in four at zero gap (touching everywhere); bar contacts' gaps stay >= 0."""
-    loads, gaps = own_values(scene)
+    loads, gaps = values(scene)
     load_cases = loads * rng.uniform(-1.5, 2.0, (cases, 1))
     gap_cases = gaps * rng.uniform(0.0, 2.0, (cases, 1))
     gap_cases[rng.random(cases) < 0.25] = 0.0
@@ -150,7 +139,7 @@ def test_a_case_the_batch_cannot_settle_is_solved_alone():
     Lagrange hands over to Lemke's method): its held rows are dependent, so the batch hands
     such cases to the single-case solve, and every case is right."""
     scene = contactqp.load_scene(SCENES / "cycle_zero_gap_loop.toml")
-    loads, gaps = own_values(scene)
+    loads, gaps = values(scene)
     load_cases = np.vstack([loads * f for f in (1.0, 0.5, -1.0)])
     batch = contactqp.prepare(scene).solve_many(load_cases, np.tile(gaps, (3, 1)))
     assert batch.alone and not batch.failures

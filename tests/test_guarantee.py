@@ -188,3 +188,27 @@ def test_the_forces_left_on_many_rows_add_up_where_a_bar_contact_ties_two_bars()
     if result.verified:
         assert_within_bound(result, exact)
 
+
+
+def test_an_open_contact_tied_across_a_stiff_element_sees_that_element():
+    """A random scene (benchmarks/guarantee.py, seed 2026, scene 889): bar 0's node 4 touches
+    bar 1's nodes 4 and 5 through two zero-gap bar contacts, and bar 1's element 4–5 is very
+    stiff. Exactly, both contacts push (the second with 6178 N, carrying the load beyond the
+    element). The penalty (ε = 1e14) leaves the second open and the stiff element carrying it
+    on a stretch of its penetration; the open contact's stiffness, taken as its two ends in
+    series (the soft one), passed it: verified, 2e-3 of F off. The end tied by the pushing
+    contact is held: the check must flag it or the answer must be right."""
+    scene = contactqp.load_scene(Path(__file__).parent / "scenes"
+                                 / "zero_gap_contacts_across_a_stiff_element.toml")
+    exact = reference(scene)
+    # by hand: the two contacts tie nodes 4 and 5 of bar 1 together, so its element 4–5 does
+    # not stretch and carries nothing: the second contact takes node 5's share of the
+    # distributed load, q·h/2
+    q, h = scene.distributed[0].intensity, scene.bars[1].lengths[-1]
+    assert exact.contact_force[-1] == pytest.approx(q * h / 2, rel=1e-9)
+    result = solve_quietly(scene, "penalty", {"penalty": 1e14}, "full")
+    if result.verified:
+        assert_within_bound(result, exact)
+    else:
+        assert abs(result.contact_force[-1] - exact.contact_force[-1]) > 1e-5 * (
+            result.force_scale)  # flagged, and rightly

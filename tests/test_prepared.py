@@ -6,8 +6,6 @@ Every expected answer is a fresh contactqp.solve of the scene built anew with th
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
@@ -21,6 +19,8 @@ from closed_forms import (
     SCENES,
     cantilever,
     default_areas,
+    rebuilt,
+    values,
 )
 from contactqp import Load, Wall
 
@@ -28,26 +28,6 @@ RUNS = [("lagrange", {}), ("penalty", {}), ("augmented", {}),
         ("qp", {"backend": "clarabel"}), ("qp", {"backend": "osqp"}),
         ("qp", {"backend": "cvxpy"})]
 RUN_IDS = ["/".join([m, *o.values()]) for m, o in RUNS]
-
-
-def rebuilt(scene: contactqp.Scene, loads: np.ndarray, gaps: np.ndarray) -> contactqp.Scene:
-    """The scene with these values, built from its parts (independently of with_values)."""
-    n_point, n_walls = len(scene.loads), len(scene.walls)
-    return contactqp.Scene(
-        scene.bars, scene.supports,
-        tuple(replace(p, force=float(f)) for p, f in zip(scene.loads, loads[:n_point])),
-        tuple(replace(w, gap=float(g)) for w, g in zip(scene.walls, gaps[:n_walls])),
-        name=scene.name,
-        distributed=tuple(replace(q, intensity=float(f))
-                          for q, f in zip(scene.distributed, loads[n_point:])),
-        contacts=tuple(replace(c, gap=float(g)) for c, g in zip(scene.contacts, gaps[n_walls:])),
-        units=scene.units)
-
-
-def values(scene: contactqp.Scene) -> tuple[np.ndarray, np.ndarray]:
-    loads = np.array([p.force for p in scene.loads] + [q.intensity for q in scene.distributed])
-    gaps = np.array([w.gap for w in scene.walls] + [c.gap for c in scene.contacts])
-    return loads, gaps
 
 
 def assert_same(result: contactqp.Result, fresh: contactqp.Result) -> None:
@@ -161,14 +141,19 @@ def test_bad_batches_are_one_clear_error_naming_the_argument(arguments, message)
         contactqp.prepare().solve_many(**arguments)
 
 
-def test_a_bar_contact_gap_may_not_be_negative():
-    scene = next(contactqp.load_scene(p) for p in EXAMPLES
-                 if contactqp.load_scene(p).contacts)
-    _, gaps = values(scene)
-    gaps[len(scene.walls)] = -1e-6
-    with pytest.raises(contactqp.OptionError, match=rf"gaps\[{len(scene.walls)}\] "
-                       r"\(contact\[0\]\.gap\) must be >= 0"):
-        contactqp.prepare(scene).solve(gaps=gaps)
+def test_a_bar_contact_gap_may_be_a_press_fit():
+    """Two bars of two elements (k = 2e7 N/m each), bar 0 held at node 0 and bar 1 at node 2,
+    bar 0's tip against bar 1's head: a gap of 1e-4 m leaves them apart; an interference of
+    1e-4 m pushes them apart with 1e-4 / (2/k + 2/k) = 500 N, the ends sharing the overlap."""
+    bar = contactqp.Bar.from_areas([1e-4, 1e-4], 2e11, length=2.0)
+    scene = contactqp.Scene((bar, bar), (contactqp.Support(0, 0), contactqp.Support(2, 1)),
+                            (), (), contacts=(contactqp.BarContact(0, 2, 1, 0, 1e-4),))
+    prepared = contactqp.prepare(scene)
+    assert prepared.solve().contact_force[0] == 0.0
+    pressed = prepared.solve(gaps=[-1e-4])
+    assert pressed.verified and pressed.contact_force[0] == pytest.approx(500.0, rel=1e-12)
+    assert pressed.u[2] == pytest.approx(-5e-5, rel=1e-12)  # each end takes half
+    assert pressed.force_scale == pytest.approx(500.0, rel=1e-12)  # the press fit's force
 
 
 def test_gaps_that_leave_a_node_no_position_are_refused():

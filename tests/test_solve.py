@@ -555,3 +555,21 @@ def test_starting_contactqp_imports_numpy_and_scipy_sparse_only(code):
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                           timeout=120, check=True)
     assert done.stdout.strip() == ""
+
+
+@pytest.mark.parametrize("method", ["lagrange", "penalty", "augmented", "qp", "lemke", "pgs",
+                                    "semismooth_newton"])
+def test_a_press_fit_between_bars_is_pushed_apart_by_every_method(method):
+    """Bar 0 (two elements, k = 2e7 N/m each) held at node 0, bar 1 (the same) at node 2; bar
+    0's tip starts 0.1 mm into bar 1's head and a 2 kN load pulls bar 1's head back in −x.
+    By hand: the tip sees k/2 = 1e7 N/m, the head k/2 too; the overlap closes as
+    λ(1/1e7 + 1/1e7) = 1e-4 + 2e3/1e7, λ = 1500 N; then u_tip = −1.5e-4 m, u_head = −5e-5 m."""
+    bar = contactqp.Bar.from_areas([1e-4, 1e-4], 2e11, length=2.0)
+    scene = contactqp.Scene((bar, bar), (contactqp.Support(0, 0), contactqp.Support(2, 1)),
+                            (contactqp.Load(0, -2e3, 1),), (),
+                            contacts=(contactqp.BarContact(0, 2, 1, 0, -1e-4),))
+    result = contactqp.solve(scene, method)
+    assert result.verified, result.message
+    assert result.contact_force[0] == pytest.approx(1500.0, rel=1e-5)
+    assert result.u[2] == pytest.approx(-1.5e-4, rel=1e-5)
+    assert result.u[3] == pytest.approx(-5e-5, rel=1e-5)

@@ -90,7 +90,7 @@ def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
                                 np.max(-gaps, axis=1, initial=0.0), widest,
                                 layout.longest_bar)
     load = load_force_terms(layout).reshape(cases, -1).max(axis=1)
-    press = layout.press_fit_forces.reshape(cases, walls).max(axis=1, initial=0.0)
+    press = per_case_rows(layout.press_fit_forces, walls, cases).max(axis=1, initial=0.0)
     F = force_scale_rule(load, press, float(layout.element_stiffness.min()), U)
     return F, U
 

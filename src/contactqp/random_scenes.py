@@ -5,7 +5,7 @@ A scene is drawn from a numpy Generator, so a seed names it. The families are wi
 purpose: element areas over five decades with stiff and soft elements side by side, moduli
 over three, lengths over two; one to three bars, each held by one or two supports; point and
 distributed loads of either sign; walls on one side or both, with zero gaps, small and large
-open gaps and press fits (negative gaps); contacts between bars. Gaps are drawn relative to
+open gaps and press fits (negative gaps); contacts between bars, with gaps and press fits too. Gaps are drawn relative to
 the displacement the loads cause, so that contacts open, close and touch in every mix.
 """
 
@@ -31,13 +31,13 @@ def random_bar(rng: np.random.Generator, max_elements: int = 8, contrast: bool =
                           lengths=10.0 ** rng.uniform(-2.0, 0.0, n))
 
 
-def _gap(rng: np.random.Generator, scale: float, press_fit: bool = True) -> float:
+def _gap(rng: np.random.Generator, scale: float) -> float:
     """Zero (30 %), an open gap from 1e-4 to 2 times ``scale`` (60 %), or a press fit of 1e-3
-    to 0.3 times ``scale`` (10 %, when allowed)."""
+    to 0.3 times ``scale`` (10 %)."""
     draw = rng.random()
     if draw < 0.3:
         return 0.0
-    if draw < 0.9 or not press_fit:
+    if draw < 0.9:
         return float(scale * 10.0 ** rng.uniform(-4.0, 0.3))
     return -float(scale * 10.0 ** rng.uniform(-3.0, -0.5))
 
@@ -99,7 +99,7 @@ def _draw(rng: np.random.Generator, max_bars: int, max_elements: int, contacts: 
             node_a, node_b = int(rng.integers(0, bars[a].n_nodes)), int(rng.integers(0, bars[b].n_nodes))
             if any((c.bar_a, c.node_a, c.bar_b, c.node_b) == (a, node_a, b, node_b) for c in between):
                 continue
-            between.append(BarContact(a, node_a, b, node_b, _gap(rng, scale, press_fit=False)))
+            between.append(BarContact(a, node_a, b, node_b, _gap(rng, scale)))
     return Scene(loaded.bars, loaded.supports, loaded.loads, tuple(walls),
                  distributed=loaded.distributed, contacts=tuple(between))
 

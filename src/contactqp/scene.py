@@ -191,8 +191,9 @@ class DistributedLoad:
 @dataclass(frozen=True)
 class BarContact:
     """Contact between node ``node_a`` of bar ``bar_a`` and node ``node_b`` of bar ``bar_b``,
-    ``gap`` (m, >= 0) apart, a facing b in +x: u_a − u_b <= gap. Its force λ >= 0 pushes a
-    in −x and b in +x."""
+    ``gap`` (m) apart, a facing b in +x: u_a − u_b <= gap. Its force λ >= 0 pushes a in −x
+    and b in +x. A negative gap is an interference: the two nodes start |gap| into each other
+    and the contact pushes them apart (a press fit between bars)."""
 
     bar_a: int
     node_a: int
@@ -326,11 +327,6 @@ class Scene:
             n_walls = len(self.walls)
             values = value_array("gaps", gaps, (self.n_contacts,),
                                  "one per wall, then one per bar contact", OptionError)
-            negative = np.flatnonzero(values[n_walls:] < 0.0)
-            if negative.size:  # a bar contact's gap is a distance between two bars
-                i = int(negative[0])
-                raise OptionError(f"gaps[{n_walls + i}] (contact[{i}].gap) must be >= 0, got "
-                                  f"{float(values[n_walls + i])!r}")
             changes["walls"] = _valued(self.walls, "gap", values[:n_walls])
             changes["contacts"] = _valued(self.contacts, "gap", values[n_walls:])
         if not changes:
@@ -460,7 +456,7 @@ def _check_contacts(scene: Scene, node, held: dict[int, int],
     for i, c in enumerate(scene.contacts):
         a = node(f"contact[{i}]", c.bar_a, c.node_a, suffix="_a")
         b = node(f"contact[{i}]", c.bar_b, c.node_b, suffix="_b")
-        number(f"contact[{i}].gap", c.gap, minimum=0.0, tiny=True)
+        number(f"contact[{i}].gap", c.gap, tiny=True)
         if a == b:
             raise SceneError(f"contact[{i}]: node_a and node_b are the same node")
         if a in held and b in held:

@@ -49,7 +49,8 @@ def method_runs(scene: Scene | None = None) -> list[tuple[str, dict]]:
                                     ("penalty", {"penalty": TEXTBOOK_PENALTY * metre}),
                                     ("augmented", {}), ("lemke", {}), ("pgs", {}),
                                     ("pgs", {"relaxation": 1.5}), ("semismooth_newton", {}),
-                                    ("semismooth_newton", {"ncp": "fischer-burmeister"})]
+                                    ("semismooth_newton", {"ncp": "fischer-burmeister"}),
+                                    ("nitsche", {})]
     for info in available_qp_solvers():
         if info.available:
             runs.append(("qp", {"backend": info.backend, "solver": info.solver}))

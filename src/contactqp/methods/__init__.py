@@ -23,6 +23,7 @@ from contactqp.methods.complementarity import (
     solve_semismooth_newton,
 )
 from contactqp.methods.lagrange import ACTIVE_SETS, solve_lagrange
+from contactqp.methods.nitsche import THETAS, solve_nitsche
 from contactqp.methods.penalty import solve_penalty
 from contactqp.methods.qp import BACKENDS, solve_qp
 from contactqp.methods.qp.settings import ACCURACIES
@@ -63,6 +64,13 @@ def _steps(value: Any) -> int:
 def _residual(value: Any) -> float:
     return positive_number("tolerance", value, "natural-map residual, dimensionless",
                            OptionError)
+
+
+def _theta(value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value not in THETAS:
+        raise OptionError(f"theta must be one of 1, 0, -1 (Nitsche's symmetric, incomplete "
+                          f"and skew-symmetric forms); got {value!r}")
+    return float(value)
 
 
 def _relaxation(value: Any) -> float:
@@ -119,6 +127,12 @@ METHODS: dict[str, Method] = {
         {"ncp": _choice("ncp", NCP_FUNCTIONS), "tolerance": _residual,
          "max_iterations": _steps},
         ("full", "condensed"), "the LCP by Newton on an NCP function (min or Fischer–Burmeister)"),
+    "nitsche": Method(
+        "nitsche", solve_nitsche,
+        {"gamma0": lambda v: positive_number("gamma0", v, "γ = γ₀·EA/h, dimensionless",
+                                             OptionError),
+         "theta": _theta, "max_iterations": _steps},
+        ("full",), "Nitsche's method for walls at a bar's end (γ₀, θ), a semismooth system"),
 }
 
 

@@ -150,20 +150,25 @@ class Layout:
 
     @cached_property
     def press_fit_force(self) -> float:
-        """The largest force that pushes a node back to a wall that starts past it (gap < 0):
-        |gap| × the stiffness the node sees with the supports held (N); 0 without one."""
+        """The largest force that pushes a press fit apart (a wall that starts past its node,
+        or two bars that start into each other: gap < 0): |gap| × the stiffness the row sees
+        with the supports held (N); 0 without one."""
         return float(np.max(self.press_fit_forces, initial=0.0))
 
     @cached_property
     def press_fit_forces(self) -> np.ndarray:
-        """Per wall, the force that pushes its node back when the wall starts past it
-        (:attr:`press_fit_force`), 0 for a wall that does not."""
-        walls = self.rows.gap[: len(self.scene.walls)]
-        forces = np.zeros(walls.size)
-        press = np.flatnonzero(walls < 0.0)
-        if press.size:
-            stiffness = seen_stiffness(self, np.zeros(0, dtype=np.intp), self.rows.node[press])
-            forces[press] = -walls[press] * stiffness
+        """Per contact row, the force that pushes its press fit apart (:attr:`press_fit_force`):
+        for a wall its node's seen stiffness, for a bar contact its two ends' in series (a
+        supported end is rigid); 0 for a row with gap >= 0."""
+        rows, nodes, _, gaps = self.rows
+        forces = np.zeros(gaps.size)
+        press = gaps < 0.0
+        if press.any():
+            entry = press[rows] & ~self.support_mask[nodes]  # a supported end adds nothing
+            stiffness = seen_stiffness(self, np.zeros(0, dtype=np.intp), nodes[entry])
+            with np.errstate(divide="ignore"):
+                compliance = np.bincount(rows[entry], 1.0 / stiffness, minlength=gaps.size)
+                forces[press] = -gaps[press] / compliance[press]
         return _read_only(forces)
 
     @cached_property
