@@ -16,7 +16,8 @@ ERROR_FLOOR = 1e-17  # errors of exactly 0 are drawn here
 GROUPS = {  # colour per method or backend
     "lagrange": "tab:blue", "penalty": "tab:orange", "augmented": "tab:green",
     "qp clarabel": "tab:red", "qp osqp": "tab:purple", "qp cvxpy": "tab:brown",
-    "qp qpsolvers": "tab:gray",
+    "qp qpsolvers": "tab:gray", "lemke": "tab:pink", "pgs": "tab:olive",
+    "semismooth_newton": "tab:cyan", "nitsche": "gold",
 }
 MARKERS = {"full": "o", "strain": "s", "condensed": "^"}
 OUTCOME_COLOURS = {"verified": "#4daf4a", "flagged": "#ffb347",

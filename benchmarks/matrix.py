@@ -55,6 +55,7 @@ import contactqp
 from cases import default_with, floor, machine, obstacle, tapered_scene, touching
 from contactqp.errors import OptionError, SceneError, SolverError
 from contactqp.methods import qp as qpmod
+from contactqp.methods.complementarity import LCP_ENTRIES, LCP_ROWS
 from contactqp.reference import reference
 
 WRONG = contactqp.GUARANTEE[0]  # a force error above this is a wrong answer (docstring)
@@ -118,7 +119,9 @@ class Spec:
         if self.method == "qp":
             return f"qp {self.backend}" + (f"/{self.solver}" if self.backend in
                                           ("cvxpy", "qpsolvers") else "")
-        return self.method + (" (equality)" if self.contact == "equality" else "")
+        extras = "".join(f" {name}={self.options[name]}" for name in ("relaxation", "ncp")
+                         if name in self.options)
+        return self.method + extras + (" (equality)" if self.contact == "equality" else "")
 
     @property
     def label(self) -> str:
@@ -136,6 +139,9 @@ def specs() -> list[Spec]:
     runs += [Spec("penalty", f, epsilon=e, options={"penalty": e})
              for e in EPSILONS for f in ("full", "condensed")]
     runs += [Spec("augmented", f) for f in ("full", "condensed")]
+    runs += [Spec("lemke"), Spec("pgs"), Spec("pgs", options={"relaxation": 1.5}),
+             Spec("semismooth_newton"),
+             Spec("semismooth_newton", options={"ncp": "fischer-burmeister"}), Spec("nitsche")]
     for info in qpmod.available_qp_solvers():
         if not info.available:
             print(f"skipped: qp {info.backend}/{info.solver} is not installed "
@@ -155,6 +161,9 @@ def skip_reason(spec: Spec, scene: contactqp.Scene, n_free: int,
                 estimate: float | None) -> str | None:
     """Why ``spec`` cannot fit ``scene``, or None."""
     unknowns = scene.n_contacts if spec.formulation == "condensed" else n_free  # at most
+    if spec.method in ("lemke", "pgs", "semismooth_newton") and (
+            scene.n_contacts > LCP_ROWS or n_free * scene.n_contacts > LCP_ENTRIES):
+        return f"the dense LCP takes up to {LCP_ROWS} rows and {LCP_ENTRIES} entries"
     if (spec.method == "qp" and (spec.backend, spec.solver) in qpmod.DENSE_SOLVERS
             and unknowns > qpmod.DENSE_LIMIT):
         return f"dense solver, {unknowns} unknowns > {qpmod.DENSE_LIMIT}"

@@ -190,5 +190,5 @@ def _merit(ncp: str, z: np.ndarray, M: np.ndarray, q: np.ndarray) -> float:
     return 0.5 * float(phi @ phi)
 
 
-__all__ = ["LCP_ROWS", "NCP_FUNCTIONS", "contact_lcp", "scaled", "solve_lemke", "solve_pgs",
+__all__ = ["LCP_ENTRIES", "LCP_ROWS", "NCP_FUNCTIONS", "contact_lcp", "scaled", "solve_lemke", "solve_pgs",
            "solve_semismooth_newton"]
