@@ -86,7 +86,7 @@ def test_main_job_prints_every_method_and_writes_charts(capsys, tmp_path):
     # the table prints 10 significant digits: agreement to 1e-9 relative
     assert float(lagrange.split()[2]) == pytest.approx(closed_form_force(), rel=1e-9)
     assert "stress beyond yield" in out
-    for name in ("bar.png", "penalty_sweep.png"):
+    for name in ("bar.png", "penalty_sweep.png", "nitsche_sweep.png", "mesh_convergence.png"):
         path = tmp_path / name
         assert f"chart: {path}" in out
         assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -24,7 +24,14 @@ from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.result import Result
 from contactqp.scene import Scene
 from contactqp.solve import as_scene, solve
-from contactqp.studies import PenaltySweep, Run, compare, mesh_convergence, penalty_sweep
+from contactqp.studies import (
+    PenaltySweep,
+    Run,
+    compare,
+    mesh_convergence,
+    nitsche_sweep,
+    penalty_sweep,
+)
 
 DEFAULT_OUT = "contactqp-out"
 OK, NOT_VERIFIED, BAD_INPUT, BUG = 0, 1, 2, 3
@@ -100,6 +107,7 @@ def _write_charts(result: Result, sweep: PenaltySweep, out: Path) -> list[str]:
     out.mkdir(parents=True, exist_ok=True)
     return [plot.save(plot.plot_bar(result), out / "bar.png"),
             plot.save(plot.plot_penalty_sweep(sweep), out / "penalty_sweep.png"),
+            plot.save(plot.plot_nitsche_sweep(nitsche_sweep()), out / "nitsche_sweep.png"),
             plot.save(plot.plot_mesh_convergence(mesh_convergence()), out / "mesh_convergence.png")]
 
 

@@ -9,7 +9,7 @@ from matplotlib.patches import Rectangle
 
 from contactqp.curve import LoadPath
 from contactqp.result import Result
-from contactqp.studies import MeshConvergence, PenaltySweep
+from contactqp.studies import MeshConvergence, NitscheSweep, PenaltySweep
 
 
 def _axes(ax: Axes | None, size: tuple[float, float] = (8, 3.5)) -> Axes:
@@ -87,6 +87,30 @@ def plot_penalty_sweep(sweep: PenaltySweep) -> Figure:
     right.set_title("force error (numbers: augmented updates)")
     right.legend(fontsize=8)
     figure.suptitle(f"penalty sweep: {sweep.reference.scene.name}")
+    return figure
+
+
+def plot_nitsche_sweep(sweep: NitscheSweep) -> Figure:
+    """Two panels over γ₀, one line per θ: Nitsche's penetration, and its contact-force error
+    against Lagrange multipliers (filled markers: verified; open: flagged)."""
+    figure = Figure(figsize=(11, 4.2), layout="constrained")
+    left, right = figure.subplots(1, 2)
+    unit = sweep.reference.scene.unit
+    floor = 1e-17  # zero errors are drawn here, on a log axis
+    for i, theta in enumerate(sweep.thetas):
+        name, colour = f"θ = {theta:g}", f"C{i}"
+        for ax, values in ((left, sweep.penetration[i]), (right, sweep.force_error[i])):
+            ran = np.isfinite(values)
+            y = np.maximum(values, floor)
+            ax.loglog(sweep.gamma0[ran], y[ran], "-", color=colour, label=name)
+            for ok, face in ((sweep.verified[i] & ran, colour), (~sweep.verified[i] & ran, "none")):
+                ax.loglog(sweep.gamma0[ok], y[ok], "o", color=colour, mfc=face, ls="")
+    left.set(xlabel="γ₀ (γ = γ₀·EA/h)", ylabel=f"largest penetration ({unit.length})",
+             title="Nitsche: penetration ≈ the end node's load / γ")
+    right.set(xlabel="γ₀ (γ = γ₀·EA/h)", ylabel="relative contact-force error vs Lagrange",
+              title="force error (filled: verified, open: flagged)")
+    left.legend(fontsize=8)
+    figure.suptitle(f"Nitsche sweep: {sweep.reference.scene.name}")
     return figure
 
 

@@ -19,7 +19,7 @@ from contactqp.methods import CONTACT_KINDS
 from contactqp.methods.penalty import TEXTBOOK_PENALTY
 from contactqp.methods.qp import available_qp_solvers
 from contactqp.result import Result, plain
-from contactqp.scene import Scene
+from contactqp.scene import Load, Scene
 from contactqp.solve import as_scene, solve
 
 SWEEP_PENALTIES = (1.0,) + tuple(10.0 ** k for k in range(5, 21))  # N/m: 1, 1e5, 1e6 … 1e20
@@ -211,3 +211,56 @@ def mesh_convergence(elements: tuple[int, ...] = (2, 4, 8, 16, 32, 64, 128, 256,
         for rule in ("midpoint", "exact")
     }
     return MeshConvergence(np.array(elements), errors, exact)
+
+
+NITSCHE_GAMMA0 = tuple(10.0 ** k for k in range(9))  # γ₀ = 1, 10, … 1e8
+NITSCHE_THETAS = (1.0, 0.0, -1.0)
+TIP_LOAD = 2e5  # N: the load nitsche_sweep's default scene adds at the wall's node
+
+
+@dataclass(frozen=True)
+class NitscheSweep:
+    """Nitsche's method over γ₀ for each θ against Lagrange: per θ (rows) and γ₀ (columns)
+    the relative contact-force error, the largest penetration (NaN where the solve failed)
+    and whether the answer was verified."""
+
+    gamma0: np.ndarray
+    thetas: tuple[float, ...]
+    force_error: np.ndarray
+    penetration: np.ndarray
+    verified: np.ndarray
+    reference: Result
+
+
+def nitsche_scene() -> Scene:
+    """The default scene with TIP_LOAD more at the wall's node: where the end node carries a
+    load, Nitsche's answer is its own and γ₀ and θ decide how far (on the default scene
+    itself it is the exact answer for every γ₀)."""
+    scene = default_scene()
+    wall = scene.walls[0]
+    return Scene(scene.bars, scene.supports, (*scene.loads, Load(wall.node, TIP_LOAD)),
+                 scene.walls, name=f"{scene.name}, {TIP_LOAD:.0f} N more at the wall's node",
+                 units=scene.units)
+
+
+def nitsche_sweep(scene: Scene | None = None,
+                  gamma0: tuple[float, ...] = NITSCHE_GAMMA0) -> NitscheSweep:
+    """Nitsche's method (θ = 1, 0, −1) at each γ₀ on ``scene`` (default
+    :func:`nitsche_scene`), against Lagrange multipliers."""
+    scene = nitsche_scene() if scene is None else as_scene(scene)
+    reference = solve(scene, "lagrange")
+    scale = max(float(np.abs(reference.contact_force).max(initial=0.0)), 1e-300)
+    shape = (len(NITSCHE_THETAS), len(gamma0))
+    error, depth = np.full(shape, np.nan), np.full(shape, np.nan)
+    verified = np.zeros(shape, dtype=bool)
+    for i, theta in enumerate(NITSCHE_THETAS):
+        for j, g in enumerate(gamma0):
+            try:
+                result = solve(scene, "nitsche", gamma0=g, theta=theta)
+            except ContactqpError:  # the symmetric form below its threshold
+                continue
+            error[i, j] = float(np.abs(result.contact_force
+                                       - reference.contact_force).max(initial=0.0)) / scale
+            depth[i, j] = float(result.penetration.max(initial=0.0))
+            verified[i, j] = result.verified
+    return NitscheSweep(np.array(gamma0), NITSCHE_THETAS, error, depth, verified, reference)
