@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from contactqp.bounds import error_bounds, row_stiffness
+from contactqp.bounds import error_bounds
 from contactqp.errors import OptionError
 from contactqp.model import (
     Layout,
@@ -56,7 +56,6 @@ from contactqp.model import (
     element_forces,
     largest,
     link_forces,
-    node_set,
     penetration,
 )
 from contactqp.scene import Scene
@@ -188,13 +187,12 @@ def free_gaps(model: Model) -> np.ndarray:
 
 
 def row_compliance_roots(layout: Layout) -> np.ndarray:
-    """√(1/s) per row, s the stiffness the row sees with the supports held
-    (:func:`contactqp.bounds.row_stiffness`; a bar contact's two ends in series); NaN where a
-    row sees no stiffness or an infinite one (it is left out of :func:`natural_map`)."""
-    s = row_stiffness(layout, node_set(layout.n_nodes, layout.support_nodes),
-                      np.zeros(layout.n_contacts, dtype=bool))
-    usable = np.isfinite(s) & (s > 0.0)
-    return np.where(usable, 1.0 / np.sqrt(np.where(usable, s, 1.0)), np.nan)
+    """√ of the compliance each row sees with the supports held
+    (:attr:`contactqp.model.Layout.row_compliance`; a bar contact's two ends in series); NaN
+    where a row sees no stiffness or an infinite one (it is left out of :func:`natural_map`)."""
+    compliance = layout.row_compliance
+    usable = np.isfinite(compliance) & (compliance > 0.0)
+    return np.where(usable, np.sqrt(np.where(usable, compliance, 1.0)), np.nan)
 
 
 def _shape(name: str, values: np.ndarray, size: int) -> None:

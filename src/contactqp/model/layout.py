@@ -36,7 +36,7 @@ TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_positio
             "element_bar_ends", "opposed_entries", "support_mask", "junctions",
             "element_stiffness", "areas", "yield_stress", "compliance", "chained_compliance",
             "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes",
-            "longest_bar")
+            "longest_bar", "row_compliance")
 
 
 def _gaps(scene: Scene) -> np.ndarray:
@@ -160,16 +160,23 @@ class Layout:
         """Per contact row, the force that pushes its press fit apart (:attr:`press_fit_force`):
         for a wall its node's seen stiffness, for a bar contact its two ends' in series (a
         supported end is rigid); 0 for a row with gap >= 0."""
-        rows, nodes, _, gaps = self.rows
+        gaps = self.rows.gap
         forces = np.zeros(gaps.size)
         press = gaps < 0.0
         if press.any():
-            entry = press[rows] & ~self.support_mask[nodes]  # a supported end adds nothing
-            stiffness = seen_stiffness(self, np.zeros(0, dtype=np.intp), nodes[entry])
             with np.errstate(divide="ignore"):
-                compliance = np.bincount(rows[entry], 1.0 / stiffness, minlength=gaps.size)
-                forces[press] = -gaps[press] / compliance[press]
+                forces[press] = -gaps[press] / self.row_compliance[press]
         return _read_only(forces)
+
+    @cached_property
+    def row_compliance(self) -> np.ndarray:
+        """Per contact row, the compliance it sees with the supports held (m/N): a wall's
+        node's 1/s, a bar contact's two ends' in series (a supported end adds nothing)."""
+        rows, nodes, _, gaps = self.rows
+        entry = ~self.support_mask[nodes]
+        stiffness = seen_stiffness(self, np.zeros(0, dtype=np.intp), nodes[entry])
+        with np.errstate(divide="ignore"):
+            return _read_only(np.bincount(rows[entry], 1.0 / stiffness, minlength=gaps.size))
 
     @cached_property
     def support_mask(self) -> np.ndarray:
