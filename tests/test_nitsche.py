@@ -113,3 +113,40 @@ def test_symmetric_nitsche_below_its_threshold_says_what_is_stable():
 def test_bad_options_are_one_clear_error(options, message):
     with pytest.raises(contactqp.OptionError, match=message):
         contactqp.solve(None, "nitsche", **options)
+
+
+BAR = contactqp.Bar.from_areas([1e-4, 1e-4], 2e11, length=2.0)  # k = 2e7 N/m per element
+
+
+@pytest.mark.parametrize("theta", THETAS)
+@pytest.mark.parametrize("gamma0", [2.0, 1e3])
+def test_a_wall_at_the_first_node_is_a_boundary_too(theta, gamma0):
+    """A bar held at its last node (2), −5 kN at node 1, a "−" wall 0.1 mm behind node 0: the
+    unloaded first node follows node 1 to −0.25 mm and passes the wall; by hand
+    λ = (0.25 − 0.1) mm / (1/k + 1/k) = 1500 N."""
+    scene = Scene(BAR, (contactqp.Support(2),), (Load(1, -5e3),), (Wall(0, 1e-4, "-"),))
+    result = contactqp.solve(scene, "nitsche", gamma0=gamma0, theta=theta)
+    assert result.verified
+    assert result.contact_force[0] == pytest.approx(1500.0, rel=1e-9)
+
+
+@pytest.mark.parametrize("theta", THETAS)
+@pytest.mark.parametrize("gamma0", [2.0, 1e3])
+def test_a_contact_between_bar_ends_is_two_boundaries(theta, gamma0):
+    """Bar 0 (k = 2e7, 2e7) held at node 0 with 5 kN at node 1; its tip 0.1 mm from bar 1's
+    head (k = 6e7, 2e7, held at node 2). By hand: the tip reaches 0.25 mm freely, so
+    λ = (0.25 − 0.1) mm / (1/2e7 + 1/2e7 + 1/6e7 + 1/2e7) = 900 N, for every γ₀ and θ (the
+    end nodes carry no load)."""
+    head = contactqp.Bar.from_areas([3e-4, 1e-4], 2e11, length=2.0)
+    scene = Scene((BAR, head), (contactqp.Support(0, 0), contactqp.Support(2, 1)),
+                  (Load(1, 5e3, 0),), (), contacts=(contactqp.BarContact(0, 2, 1, 0, 1e-4),))
+    result = contactqp.solve(scene, "nitsche", gamma0=gamma0, theta=theta)
+    assert result.verified
+    assert result.contact_force[0] == pytest.approx(900.0, rel=1e-9)
+
+
+def test_a_bar_contact_off_the_bar_ends_is_refused():
+    scene = Scene((BAR, BAR), (contactqp.Support(0, 0), contactqp.Support(2, 1)),
+                  (Load(1, 5e3, 0),), (), contacts=(contactqp.BarContact(0, 1, 1, 0, 1e-4),))
+    with pytest.raises(contactqp.OptionError, match="contact between bar ends"):
+        contactqp.solve(scene, "nitsche")

@@ -1,9 +1,10 @@
-"""Nitsche's method for walls at a bar's end: the contact force taken from the stress of the
-element at the contact, no multiplier and no penalty alone.
+"""Nitsche's method for walls at a bar's end and contacts between bar ends: the contact force
+taken from the stress of the element at the contact, no multiplier and no penalty alone.
 
 At a bar's end with outward normal ν (+1 at its last node, −1 at its first) a wall on that
 side is the boundary condition u_n = ν·u_end <= g. The end element's force gives the normal
-stress σ_n(u) = k (u_end − u_inner) (k = EA/h of that element; tension positive along ν),
+stress σ_n(u) = N = k (u_right − u_left) (k = EA/h of that element; tension positive at
+either end, as σ_nn does not turn with the normal),
 and the Signorini conditions are σ_n = [P_γ(u)]₋, P_γ(u) = σ_n(u) − γ (u_n − g), for any
 γ > 0 (Chouly and Hild; GetFEM's and dolfinx's contact demos). Nitsche's weak form adds to
 K u = P, per wall,
@@ -16,7 +17,10 @@ with P_γ < 0, each step one sparse solve, until the set repeats. The contact fo
 λ = −[P_γ(u)]₋ >= 0. Where the end node carries no load the answer is the exact discrete
 Signorini answer for every γ₀ (consistency: the element's force is the contact force there);
 a load at the end node (a distributed load's share) makes it differ by what γ₀ and θ decide,
-which vanishes as γ₀ → ∞. A wall at an interior node has no boundary for Nitsche: refused.
+which vanishes as γ₀ → ∞. A bar contact between the last node of one bar and the first node
+of another is two boundaries in contact: σ_n is the mean of the two end elements' forces, γ
+scaled by the mean of their stiffnesses, u_n = u_a − u_b. A wall at an interior node has no
+boundary for Nitsche, nor a bar contact elsewhere: refused with the reason.
 """
 
 from __future__ import annotations
@@ -34,35 +38,54 @@ DEFAULT_GAMMA0 = 100.0
 MAX_ITERATIONS = 50
 
 
-def end_rows(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per contact row: (the free unknown of the wall's node, of the end element's other node
-    or −1 where that is a support, ν, k of the end element); an OptionError for a row that is
-    not a wall at a bar's end facing out."""
+def boundary_rows(model: Model) -> tuple[sp.csr_array, np.ndarray]:
+    """(S: per contact row, the gradient of its normal stress σ_n(u) over the free nodes;
+    the stiffness k each row's γ is scaled by). A wall at a bar's end facing out: σ_n the end
+    element's force, k its stiffness. A bar contact between the last node of one bar and the
+    first node of the next (a facing b in +x, two boundaries in contact): σ_n the mean of the
+    two end elements' forces, k the mean of their stiffnesses. Any other row is an
+    OptionError that says why."""
     layout = model.layout
-    rows, nodes, signs, _ = layout.rows
-    n_walls = len(layout.scene.walls)
-    if model.n_contacts > n_walls:
-        raise OptionError("method 'nitsche' imposes walls at a bar's end; bar contacts are not "
-                          "built for it (use lagrange or another method)")
+    rows, nodes, signs, gaps = layout.rows
     first, last = layout.bar_ends
     position = np.full(layout.n_nodes, -1)
     position[model.free] = np.arange(model.n_free)
-    end, inner, normal, stiffness = [], [], [], []
-    for row, node, sign in zip(rows.tolist(), nodes.tolist(), signs.tolist()):
-        at_last, at_first = node == last[node], node == first[node]
-        if not (at_last and sign > 0) and not (at_first and sign < 0):
-            bar = int(layout.node_bar[node])
-            where = f"bar {bar} node {node - int(layout.node_offsets[bar])}"
-            raise OptionError(
-                f"method 'nitsche' imposes contact on a boundary of a bar: wall[{row}] at {where} "
-                + ("is at an interior node, which has no boundary" if not (at_last or at_first)
-                   else "faces into the bar") + " (use lagrange or another method)")
-        other = node - 1 if at_last and sign > 0 else node + 1
-        end.append(position[node])
-        inner.append(position[other])
-        normal.append(1.0 if sign > 0 else -1.0)
-        stiffness.append(float(layout.link_stiffness[min(node, other)]))
-    return np.array(end), np.array(inner), np.array(normal), np.array(stiffness)
+    entries: list[tuple[int, int, float]] = []  # (row, free unknown, value of ∂σ_n/∂u)
+    scale = np.zeros(gaps.size)
+    n_walls = len(layout.scene.walls)
+    order = np.argsort(rows, kind="stable")  # each row's entries together
+    for row, mine in enumerate(np.split(order, np.flatnonzero(np.diff(rows[order])) + 1)):
+        if row < n_walls:
+            node, sign = int(nodes[mine[0]]), float(signs[mine[0]])
+            faces_out = (node == last[node] and sign > 0) or (node == first[node] and sign < 0)
+            if not faces_out:
+                bar = int(layout.node_bar[node])
+                where = f"bar {bar} node {node - int(layout.node_offsets[bar])}"
+                reason = ("is at an interior node, which has no boundary"
+                          if node not in (first[node], last[node]) else "faces into the bar")
+                raise OptionError(f"method 'nitsche' imposes contact on a boundary of a bar: "
+                                  f"wall[{row}] at {where} {reason} (use lagrange or another "
+                                  "method)")
+            ends = [(node, node - 1 if sign > 0 else node + 1, 1.0)]
+        else:
+            a = int(nodes[mine][signs[mine] > 0][0])
+            b = int(nodes[mine][signs[mine] < 0][0])
+            if not (a == last[a] and b == first[b]):
+                raise OptionError(
+                    f"method 'nitsche' imposes contact between bar ends: contact[{row - n_walls}] "
+                    "must join the last node of one bar (a) to the first node of another (b) "
+                    "(use lagrange or another method)")
+            ends = [(a, a - 1, 0.5), (b, b + 1, 0.5)]
+        for node, other, weight in ends:
+            # σ_n is the end element's force N = k (u_right − u_left), tension positive,
+            # whichever end of the bar (σ_nn does not turn with the normal)
+            k = float(layout.link_stiffness[min(node, other)])
+            along = weight * k * (1.0 if node > other else -1.0)
+            entries += [(row, position[node], along), (row, position[other], -along)]
+            scale[row] += weight * k
+    kept = [(r, c, v) for r, c, v in entries if c >= 0]  # a supported node has no unknown
+    r, c, v = (np.array(x) for x in zip(*kept))
+    return sp.csr_array((v, (r, c)), shape=(gaps.size, model.n_free)), scale
 
 
 def solve_nitsche(model: Model, contact: str, *, gamma0: float = DEFAULT_GAMMA0,
@@ -70,13 +93,11 @@ def solve_nitsche(model: Model, contact: str, *, gamma0: float = DEFAULT_GAMMA0,
     """Nitsche's method (module docstring) with γ = ``gamma0`` × EA/h and ``theta``."""
     if model.n_contacts == 0:
         return Solution(model.free_displacement, np.zeros(0), solver="nitsche")
-    end, inner, normal, k = end_rows(model)
+    S, k = boundary_rows(model)  # σ_n(u) = S u per row
     gamma = gamma0 * k
-    # σ_n(u) = s·u, s = k (e_end − e_inner); u_n = ẽ·u, ẽ = ν e_end (one row each)
-    S = _rows(model.n_free, k, end, -k, inner)
-    E = _rows(model.n_free, normal, end)
+    E = model.C  # the normal displacement u_n = C u (a wall: ν u_end; a contact: u_a − u_b)
     g = model.g
-    active = np.ones(end.size, dtype=bool)  # start in contact: the first step then tells
+    active = np.ones(model.n_contacts, dtype=bool)  # start in contact: the first step tells
     seen: set[bytes] = set()
     for iteration in range(1, max_iterations + 1):
         # per row, active: −θ s ẽᵀ − ẽ sᵀ + γ ẽ ẽᵀ, right-hand side −g (θ s − γ ẽ);
@@ -99,7 +120,8 @@ def solve_nitsche(model: Model, contact: str, *, gamma0: float = DEFAULT_GAMMA0,
                               f"γ₀ = {gamma0:g} ({error}); a larger γ₀ or θ = −1 is stable"
                               ) from None
         trial = S @ u - gamma * (E @ u - g)  # P_γ(u)
-        following = np.ones(end.size, dtype=bool) if contact == "equality" else trial < 0.0
+        following = (np.ones(model.n_contacts, dtype=bool) if contact == "equality"
+                     else trial < 0.0)
         force = np.where(following, -trial, 0.0)
         if np.array_equal(following, active):
             return Solution(u, force, solver="nitsche", iterations=iteration,
@@ -116,20 +138,4 @@ def solve_nitsche(model: Model, contact: str, *, gamma0: float = DEFAULT_GAMMA0,
                     claimed_success=False, info={"gamma0": gamma0, "theta": theta})
 
 
-def _rows(n: int, values_a: np.ndarray, columns_a: np.ndarray,
-          values_b: np.ndarray | None = None, columns_b: np.ndarray | None = None
-          ) -> sp.csr_array:
-    """Sparse rows (one per wall) with ``values_a`` at ``columns_a`` (and ``values_b`` at
-    ``columns_b``, skipped where the column is −1: a support)."""
-    count = columns_a.size
-    row, col, val = [np.arange(count)], [columns_a], [values_a]
-    if values_b is not None:
-        keep = columns_b >= 0
-        row.append(np.arange(count)[keep])
-        col.append(columns_b[keep])
-        val.append(values_b[keep])
-    return sp.csr_array((np.concatenate(val), (np.concatenate(row), np.concatenate(col))),
-                        shape=(count, n))
-
-
-__all__ = ["DEFAULT_GAMMA0", "THETAS", "end_rows", "solve_nitsche"]
+__all__ = ["DEFAULT_GAMMA0", "THETAS", "boundary_rows", "solve_nitsche"]
