@@ -364,8 +364,10 @@ def write(rows: list[dict[str, Any]], case_rows: list[dict[str, Any]], out: Path
     (out / "runs.json").write_text(json.dumps(document, indent=1, default=_plain))
     (out / "best.md").write_text(best_table(rows, case_rows))
     import charts  # matplotlib only when writing
+    import profiles
 
     charts.draw_all(rows, case_rows, out, WRONG)
+    profiles.write(rows, out, TIMEOUT)
 
 
 def _plain(value: Any) -> Any:
@@ -387,7 +389,8 @@ def main(quick: bool, out: Path) -> None:
           f"time_vs_elements.png, penalty.png, stability_map.png")
 
 
-CHARTS = ("speed_accuracy.png", "time_vs_elements.png", "penalty.png", "stability_map.png")
+CHARTS = ("speed_accuracy.png", "time_vs_elements.png", "penalty.png", "stability_map.png",
+          "profiles.png")
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
@@ -417,4 +420,6 @@ def check_outputs(out: Path) -> list[str]:
             problems.append(f"{name} is missing or not a PNG chart")
     if "| case |" not in (out / "best.md").read_text():
         problems.append("best.md has no table")
+    if "| setting |" not in (out / "profiles.md").read_text():
+        problems.append("profiles.md has no table")
     return problems
