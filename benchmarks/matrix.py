@@ -55,7 +55,7 @@ import contactqp
 from cases import default_with, floor, machine, obstacle, tapered_scene, touching
 from contactqp.errors import OptionError, SceneError, SolverError
 from contactqp.methods import qp as qpmod
-from contactqp.methods.complementarity import LCP_ENTRIES, LCP_ROWS
+from contactqp.methods.complementarity import LCP_ENTRIES, LCP_ROWS, contact_lcp
 from contactqp.reference import reference
 
 WRONG = contactqp.GUARANTEE[0]  # a force error above this is a wrong answer (docstring)
@@ -67,6 +67,7 @@ REPEATS = {False: lambda first: 5 if first < 0.05 else 3 if first < 0.3 else 1 i
            True: lambda first: 3 if first < 0.05 else 1}
 ISOLATE_FROM = 10**4  # elements: from this size every run goes to a forked child ...
 TIMEOUT = 20.0  # s: ... that is stopped after this long (the run is then skipped, with why)
+CONDITION_LIMIT = 2000  # unknowns up to which a case's condition numbers are computed (dense)
 BUDGET = 5.0  # s: a run whose time, extrapolated from the previous size, exceeds it is skipped
 GROWTH = 1.5  # the extrapolation: time ~ n^GROWTH (CVXOPT through cvxpy took 30 ms on 1e2
               # elements and 290 s on 1e4: linear extrapolation let it run)
@@ -290,7 +291,7 @@ def run(quick: bool) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
                           "contacts": scene.n_contacts, "floor_seconds": floor_s,
                           "reference_force_max": float(exact.contact_force.max(initial=0.0)),
                           "reference_active": int(np.count_nonzero(exact.contact_force > 0)),
-                          "reference_steps": exact.steps})
+                          "reference_steps": exact.steps, **conditioning(model)})
         for spec in all_specs:
             row = {"case": case.name, "elements": scene.n_elements,
                    "contacts": scene.n_contacts, "row": spec.row, "label": spec.label,
@@ -326,23 +327,46 @@ def run(quick: bool) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     return rows, case_rows
 
 
+def conditioning(model: contactqp.Model) -> dict[str, float | None]:
+    """What describes a case to the QP world (as fclib describes its problems): the stiffness
+    contrast (largest over smallest element stiffness), the 2-norm condition numbers of K
+    and of the contact operator W = C K⁻¹ Cᵀ (dense, so up to CONDITION_LIMIT unknowns; None
+    beyond), and W's rank."""
+    k = model.layout.element_stiffness
+    out: dict[str, float | None] = {"stiffness_contrast": float(k.max() / k.min()),
+                                    "cond_K": None, "cond_W": None, "rank_W": None}
+    if model.n_free <= CONDITION_LIMIT and model.n_contacts <= CONDITION_LIMIT:
+        out["cond_K"] = float(np.linalg.cond(model.K.toarray()))
+        W, *_ = contact_lcp(model)
+        out["cond_W"] = float(np.linalg.cond(W)) if W.size else None
+        out["rank_W"] = int(np.linalg.matrix_rank(W)) if W.size else 0
+    return out
+
+
 def best_table(rows: list[dict[str, Any]], case_rows: list[dict[str, Any]]) -> str:
-    lines = [("| case | elements | contacts | floor | fastest verified (time, / floor, error) "
-             "| most accurate verified (error, time) |"), "|---|---|---|---|---|---|"]
+    lines = [("| case | elements | contacts | contrast | cond K | cond W | floor "
+              "| fastest verified (time, / floor, error) "
+              "| most accurate verified (error, time) |"), "|---" * 9 + "|"]
     for case in case_rows:
+        described = (f"| {case['case']} | {case['elements']} | {case['contacts']} | "
+                     f"{_number(case.get('stiffness_contrast'))} | "
+                     f"{_number(case.get('cond_K'))} | {_number(case.get('cond_W'))} | "
+                     f"{_time(case['floor_seconds'])} |")
         ran = [r for r in rows if r["case"] == case["case"] and r["outcome"] == "verified"]
         if not ran:
-            lines.append(f"| {case['case']} | {case['elements']} | {case['contacts']} | "
-                         f"{_time(case['floor_seconds'])} | none | none |")
+            lines.append(f"{described} none | none |")
             continue
         fastest = min(ran, key=lambda r: r["seconds"])
         exact = min(ran, key=lambda r: (r["force_error"], r["seconds"]))
         lines.append(
-            f"| {case['case']} | {case['elements']} | {case['contacts']} | "
-            f"{_time(case['floor_seconds'])} | {fastest['label']}: {_time(fastest['seconds'])}, "
+            f"{described} {fastest['label']}: {_time(fastest['seconds'])}, "
             f"{fastest['ratio']:.1f}×, {fastest['force_error']:.1e} | {exact['label']}: "
             f"{exact['force_error']:.1e}, {_time(exact['seconds'])} |")
     return "\n".join(lines) + "\n"
+
+
+def _number(value: float | None) -> str:
+    return "–" if value is None else f"{value:.2g}"
 
 
 def _time(seconds: float) -> str:
