@@ -217,6 +217,7 @@ def run_one(spec: Spec, scene: contactqp.Scene, exact: np.ndarray, floor_s: floa
         **{f"residual_{k}": v for k, v in result.residuals.items()},
         "verified": bool(result.verified), "physical": bool(result.physical),
         "claimed_success": bool(result.claimed_success), "status": str(result.status),
+        "message": result.message,
         "iterations": int(result.iterations), "cache": info.get("cache", ""),
         "outcome": outcome(accepted, bool(result.claimed_success), right),
         "claimed_success_wrong": bool(result.claimed_success and not right),
@@ -365,6 +366,21 @@ def best_table(rows: list[dict[str, Any]], case_rows: list[dict[str, Any]]) -> s
     return "\n".join(lines) + "\n"
 
 
+def failure_table(rows: list[dict[str, Any]]) -> str:
+    """Every run that is not verified, with why (the check's message, or why it was skipped):
+    the stability map's cells, a table away."""
+    lines = ["| case | run | outcome | force error / F | why |", "|---|---|---|---|---|"]
+    for r in rows:
+        if r["outcome"] == "verified":
+            continue
+        why = r.get("skip_reason") or r.get("message") or r.get("status", "")
+        error = r.get("force_error")
+        lines.append(f"| {r['case']} | {r['label']} | {r['outcome']} | "
+                     f"{'–' if error is None else f'{error:.1e}'} | "
+                     f"{str(why).replace('|', '/')[:160]} |")
+    return "\n".join(lines) + "\n"
+
+
 def _number(value: float | None) -> str:
     return "–" if value is None else f"{value:.2g}"
 
@@ -387,6 +403,7 @@ def write(rows: list[dict[str, Any]], case_rows: list[dict[str, Any]], out: Path
                 "cases": case_rows, "runs": rows}
     (out / "runs.json").write_text(json.dumps(document, indent=1, default=_plain))
     (out / "best.md").write_text(best_table(rows, case_rows))
+    (out / "failures.md").write_text(failure_table(rows))
     import charts  # matplotlib only when writing
     import profiles
 
@@ -444,6 +461,8 @@ def check_outputs(out: Path) -> list[str]:
             problems.append(f"{name} is missing or not a PNG chart")
     if "| case |" not in (out / "best.md").read_text():
         problems.append("best.md has no table")
+    if "| case | run |" not in (out / "failures.md").read_text():
+        problems.append("failures.md has no table")
     if "| setting |" not in (out / "profiles.md").read_text():
         problems.append("profiles.md has no table")
     return problems
