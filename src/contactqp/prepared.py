@@ -22,7 +22,7 @@ import numpy as np
 from contactqp.batch import Batch, solve_batch, tiled_scene
 from contactqp.errors import OptionError
 from contactqp.feasibility import equality_conflict
-from contactqp.methods import Method, cases
+from contactqp.methods import Method, cases, complementarity
 from contactqp.model import Model, build_model
 from contactqp.model.layout import TOPOLOGY
 from contactqp.result import Result, make_result
@@ -97,10 +97,10 @@ class Prepared:
 
     @property
     def flexibility(self) -> tuple[np.ndarray, np.ndarray]:
-        """(K⁻¹Cᵀ, W = C K⁻¹ Cᵀ) of the scene (:func:`contactqp.methods.cases.flexibility`),
-        formed on first use."""
+        """(K⁻¹Cᵀ, W = C K⁻¹ Cᵀ) of the scene
+        (:func:`contactqp.methods.complementarity.flexibility`), formed on first use."""
         if "flexibility" not in self._kept:
-            self._kept["flexibility"] = cases.flexibility(self.model)
+            self._kept["flexibility"] = complementarity.flexibility(self.model)
         return self._kept["flexibility"]
 
     @property

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
+from contactqp.methods.complementarity import flexibility
 from contactqp.model import Model
 
 CASES_ROWS = 64  # contact rows up to which the cases are solved together (W is rows x rows;
@@ -46,19 +47,13 @@ class CasesSolution:
     free_displacement: np.ndarray
 
 
-def flexibility(model: Model) -> tuple[np.ndarray, np.ndarray]:
-    """(K⁻¹Cᵀ, free nodes x rows; W = C K⁻¹ Cᵀ, rows x rows): what every case shares."""
-    columns = model.solve_K(model.C.T.toarray())
-    W = model.C @ columns
-    return columns, 0.5 * (W + W.T)
-
-
 def solve_cases(model: Model, contact: str, loads: np.ndarray, gaps: np.ndarray, *,
                 penalty: float | None = None, max_iterations: int | None = None,
                 shared: tuple[np.ndarray, np.ndarray] | None = None) -> CasesSolution:
     """Every case of ``loads`` (cases x free nodes, the nodal loads P) and ``gaps`` (cases x
     rows): by Lagrange multipliers (``penalty`` None) or the penalty ε (module docstring).
-    ``shared``: :func:`flexibility` of the model, when the caller keeps it."""
+    ``shared``: :func:`contactqp.methods.complementarity.flexibility` of the model, when the
+    caller keeps it."""
     C = model.C
     flexibility_columns, W = flexibility(model) if shared is None else shared
     u_free = model.solve_K(loads.T).T  # K⁻¹P of every case
@@ -135,4 +130,4 @@ def _held_forces(W: np.ndarray, soft: float, q: np.ndarray,
     return lam, singular
 
 
-__all__ = ["CASES_ENTRIES", "CASES_ROWS", "CasesSolution", "fits", "flexibility", "solve_cases"]
+__all__ = ["CASES_ENTRIES", "CASES_ROWS", "CasesSolution", "fits", "solve_cases"]

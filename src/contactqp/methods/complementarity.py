@@ -31,7 +31,6 @@ import math
 
 import numpy as np
 
-from contactqp import linalg
 from contactqp.check import natural_map
 from contactqp.errors import SolverError
 from contactqp.methods.lemke import lemke
@@ -57,11 +56,18 @@ def contact_lcp(problem: Model | Condensed) -> tuple[np.ndarray, np.ndarray, np.
                           f"(rows x rows) and K⁻¹Cᵀ: up to {LCP_ROWS} contact rows and "
                           f"{LCP_ENTRIES} entries; this scene has {rows} rows and "
                           f"{problem.n_free} free nodes (use lagrange)")
-    C = problem.C
-    columns = linalg.solve(problem.K, np.column_stack((problem.P, C.T.toarray())), spd=True)
-    u_free, flexibility = columns[:, 0], columns[:, 1:]
-    W = C @ flexibility
-    return 0.5 * (W + W.T), problem.g - C @ u_free, u_free, flexibility
+    columns, W = flexibility(problem)
+    u_free = problem.free_displacement
+    return W, problem.g - problem.C @ u_free, u_free, columns
+
+
+def flexibility(problem: Model | Condensed) -> tuple[np.ndarray, np.ndarray]:
+    """(K⁻¹Cᵀ, free nodes x rows; W = C K⁻¹ Cᵀ, rows x rows, symmetric): the contact
+    operator, through the problem's own solve with K (statics where every bar is held by one
+    support)."""
+    columns = problem.solve_K(problem.C.T.toarray())
+    W = problem.C @ columns
+    return columns, 0.5 * (W + W.T)
 
 
 def scaled(W: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -190,5 +196,5 @@ def _merit(ncp: str, z: np.ndarray, M: np.ndarray, q: np.ndarray) -> float:
     return 0.5 * float(phi @ phi)
 
 
-__all__ = ["LCP_ENTRIES", "LCP_ROWS", "NCP_FUNCTIONS", "contact_lcp", "scaled", "solve_lemke", "solve_pgs",
+__all__ = ["LCP_ENTRIES", "LCP_ROWS", "NCP_FUNCTIONS", "contact_lcp", "flexibility", "scaled", "solve_lemke", "solve_pgs",
            "solve_semismooth_newton"]
