@@ -35,8 +35,21 @@ def load(path: Path) -> qpsolvers.Problem:
     return qpsolvers.Problem(matrix("P"), data["q"], matrix("G"), data["h"])
 
 
+DENSE_UP_TO = 1000  # unknowns up to which problems are handed over dense
+
+
 class ContactqpTestSet(qpbenchmark.TestSet):
     """The problems in problems/*.npz, smallest first."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        # DAQP (dense, no time-limit parameter) ran past the 10 s limit for more than 90 s on
+        # the 10⁴-unknown bar and stalled the run: a known timeout, as qpbenchmark's own test
+        # sets record theirs (counted as a failure, not run)
+        for path in PROBLEMS.glob("*.npz"):
+            if load(path).P.shape[0] > DENSE_UP_TO:
+                for settings in self.solver_settings:
+                    self.known_solver_timeouts[(path.stem, "daqp", settings)] = 90.0
 
     @property
     def description(self) -> str:
@@ -53,7 +66,9 @@ class ContactqpTestSet(qpbenchmark.TestSet):
         return False
 
     def __iter__(self) -> Iterator[qpbenchmark.Problem]:
-        """Dense (qpbenchmark converts them back to sparse for the sparse-only solvers, and
-        the dense-only ones take nothing else: up to 10³ unknowns, a few MB each)."""
+        """Dense up to DENSE_UP_TO unknowns (qpbenchmark converts them back to sparse for the
+        sparse-only solvers, and the dense-only ones take nothing else), sparse beyond (a
+        dense 10⁴ x 10⁴ matrix is 800 MB: the dense-only solvers refuse it)."""
         for path in sorted(PROBLEMS.glob("*.npz"), key=lambda p: (p.stat().st_size, p.name)):
-            yield qpbenchmark.Problem.from_qpsolvers(load(path), path.stem).to_dense()
+            problem = qpbenchmark.Problem.from_qpsolvers(load(path), path.stem)
+            yield problem.to_dense() if problem.P.shape[0] <= DENSE_UP_TO else problem
