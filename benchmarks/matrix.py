@@ -426,8 +426,8 @@ def main(quick: bool, out: Path) -> None:
     print(best_table(rows, case_rows))
     print(f"{len(rows)} runs in {time.perf_counter() - start:.0f} s: " +
           ", ".join(f"{n} {name}" for name, n in counts.items()))
-    print(f"written: {out}/runs.csv, runs.json, best.md, speed_accuracy.png, "
-          f"time_vs_elements.png, penalty.png, stability_map.png")
+    print(f"written: {out}/runs.csv, runs.json, best.md, failures.md, profiles.md, "
+          f"{', '.join(CHARTS)}")
 
 
 CHARTS = ("speed_accuracy.png", "time_vs_elements.png", "penalty.png", "stability_map.png",
