@@ -107,7 +107,10 @@ class Batch:
     past the wall). verified, physical : per case. residuals : each residual of the check per
     case (NaN where a contact kind has none). force_error_bound, displacement_error_bound,
     force_scale, displacement_scale : per case (force, length). iterations : per case.
-    alone : the cases solved on their own (case -> its Result). time : the batch's seconds.
+    alone : the cases checked on their own (case -> its Result: the batch's answer or, where
+    that failed, the case solved again alone; every case where the method does not solve
+    cases together). failures : the cases whose single-case solve raised (case -> the error).
+    time : the batch's seconds.
     """
 
     prepared: Prepared = field(repr=False)
@@ -258,37 +261,39 @@ def _values(values: np.ndarray | None, own: np.ndarray, cases: int) -> np.ndarra
     return np.broadcast_to(own, (cases, own.size)) if values is None else values
 
 
+ROW_FIELDS = ("u", "contact_force", "reactions", "penetration", "verified", "physical",
+              "force_error_bound", "displacement_error_bound", "force_scale",
+              "displacement_scale")  # a Result's quantities that a Batch holds one row of
+
+
+def _row(result: Result) -> dict[str, Any]:
+    """A case's row of every array of a Batch, from its own Result."""
+    return {**{name: getattr(result, name) for name in ROW_FIELDS},
+            "iterations": result.iterations or 0,
+            "residuals": {name: np.nan if value is None else value
+                          for name, value in result.residuals.items()}}
+
+
 def _take(batch: Batch, case: int, result: Result) -> None:
     """Case ``case``'s row of every array from its own Result."""
-    for name in ("u", "contact_force", "reactions", "penetration"):
-        getattr(batch, name)[case] = getattr(result, name)
-    batch.verified[case], batch.physical[case] = result.verified, result.physical
-    for name, value in result.residuals.items():
-        batch.residuals[name][case] = np.nan if value is None else value
-    batch.force_error_bound[case] = result.force_error_bound
-    batch.displacement_error_bound[case] = result.displacement_error_bound
-    batch.force_scale[case] = result.force_scale
-    batch.displacement_scale[case] = result.displacement_scale
-    batch.iterations[case] = result.iterations or 0
+    row = _row(result)
+    for name, value in row.items():
+        if name != "residuals":
+            getattr(batch, name)[case] = value
+    for name, value in row["residuals"].items():
+        batch.residuals[name][case] = value
 
 
 def _case_by_case(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,
                   cases: int, start: float) -> Batch:
     results = {case: _alone(prepared, loads, gaps, case) for case in range(cases)}
-
-    def stack(name: str, dtype: Any = float) -> np.ndarray:
-        return np.array([getattr(results[case], name) for case in range(cases)], dtype=dtype)
-
-    names = results[0].residuals
-    residuals = {name: np.array([np.nan if results[case].residuals[name] is None
-                                 else results[case].residuals[name] for case in range(cases)])
-                 for name in names}
-    iterations = np.array([results[case].iterations or 0 for case in range(cases)])
-    return Batch(prepared, loads, gaps, stack("u"), stack("contact_force"), stack("reactions"),
-                 stack("penetration"), stack("verified", bool), stack("physical", bool),
-                 residuals, stack("force_error_bound"), stack("displacement_error_bound"),
-                 stack("force_scale"), stack("displacement_scale"), iterations,
-                 results[0].solver, results, time.perf_counter() - start)
+    rows = [_row(results[case]) for case in range(cases)]
+    arrays = {name: np.array([row[name] for row in rows])
+              for name in (*ROW_FIELDS, "iterations")}
+    residuals = {name: np.array([row["residuals"][name] for row in rows])
+                 for name in rows[0]["residuals"]}
+    return Batch(prepared, loads, gaps, **arrays, residuals=residuals,
+                 solver=results[0].solver, alone=results, time=time.perf_counter() - start)
 
 
 __all__ = ["Batch", "case_scales", "solve_batch", "tiled_scene"]

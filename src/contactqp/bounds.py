@@ -32,6 +32,7 @@ class Bounds:
     residuals: dict[str, float | None]
     force_error_bound: float
     displacement_error_bound: float
+    penetration: np.ndarray  # C u − g per row (m), as the residuals read it
 
 
 def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarray,
@@ -110,7 +111,7 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
         residuals["sign"] = float(np.max(-lam, initial=0.0)) / F
     residuals["force"] = force_bound / F
     residuals["displacement"] = displacement_bound / U
-    return Bounds(residuals, force_bound, displacement_bound)
+    return Bounds(residuals, force_bound, displacement_bound, pen)
 
 
 def _pushing(layout: Layout, lam: np.ndarray, pen: np.ndarray, hold: float,

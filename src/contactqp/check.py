@@ -153,7 +153,7 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
         if value is not None and not value <= getattr(tolerances, name)
     ]
     residuals["natural_map"] = None if contact == "equality" else float(natural_map(
-        lam, -penetration(layout, u), free_gaps(model), row_compliance_roots(layout)))
+        lam, -bounds.penetration, free_gaps(model), row_compliance_roots(layout)))
     pulling = float(np.max(-lam, initial=0.0)) / F
     physical = pulling <= tolerances.sign
     notes = list(failures)
