@@ -33,7 +33,7 @@ import numpy as np
 
 from contactqp.check import natural_map
 from contactqp.errors import SolverError
-from contactqp.methods.lemke import lemke
+from contactqp.methods.lemke import lemke, unit_diagonal
 from contactqp.model import Condensed, Model, without_circulation
 from contactqp.result import Solution
 
@@ -70,31 +70,22 @@ def flexibility(problem: Model | Condensed) -> tuple[np.ndarray, np.ndarray]:
     return columns, 0.5 * (W + W.T)
 
 
-def scaled(W: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(M = D W D with a unit diagonal, q̃ = D q, D = diag(W)^-½)."""
-    diagonal = np.diag(W)
-    fallback = 1.0 / math.sqrt(float(np.abs(W).max(initial=0.0)) or 1.0)
-    with np.errstate(divide="ignore"):
-        D = np.where(diagonal > 0.0, 1.0 / np.sqrt(diagonal), fallback)
-    return D[:, None] * W * D[None, :], D * q, D
-
-
 def _answer(problem: Model | Condensed, contact: str, solver: str, z_solver) -> Solution:
     """The Solution from the LCP's λ (``z_solver(M, q̃) -> (z, iterations, converged, status,
     info)`` on the scaled problem); equality contact by one linear solve."""
-    W, q, u_free, flexibility = contact_lcp(problem)
+    W, q, u_free, columns = contact_lcp(problem)
     if contact == "equality":
         try:
             lam = np.linalg.solve(W, -q) if q.size else np.zeros(0)
         except np.linalg.LinAlgError:
             raise SolverError(f"{solver}: W = C K⁻¹ Cᵀ is singular (rows that hold the same "
                               "nodes twice)") from None
-        return Solution(u_free - flexibility @ lam, lam, solver=solver, status="solved")
-    M, q_scaled, D = scaled(W, q)
+        return Solution(u_free - columns @ lam, lam, solver=solver, status="solved")
+    M, q_scaled, D = unit_diagonal(W, q)
     z, iterations, converged, status, info = z_solver(M, q_scaled)
     residual = natural_map(z, M @ z + q_scaled, q_scaled)
     lam = without_circulation(problem, D * z)
-    return Solution(u_free - flexibility @ lam, lam, solver=solver, iterations=iterations,
+    return Solution(u_free - columns @ lam, lam, solver=solver, iterations=iterations,
                     status=status, claimed_success=converged,
                     info={**info, "natural_map": residual})
 
@@ -196,5 +187,5 @@ def _merit(ncp: str, z: np.ndarray, M: np.ndarray, q: np.ndarray) -> float:
     return 0.5 * float(phi @ phi)
 
 
-__all__ = ["LCP_ENTRIES", "LCP_ROWS", "NCP_FUNCTIONS", "contact_lcp", "flexibility", "scaled", "solve_lemke", "solve_pgs",
-           "solve_semismooth_newton"]
+__all__ = ["LCP_ENTRIES", "LCP_ROWS", "NCP_FUNCTIONS", "contact_lcp", "flexibility",
+           "solve_lemke", "solve_pgs", "solve_semismooth_newton"]

@@ -42,13 +42,9 @@ def lemke(M: np.ndarray, q: np.ndarray, max_pivots: int | None = None) -> tuple[
     n = q.size
     if n == 0 or q.min() >= 0.0:
         return np.zeros(n), 0
-    diagonal = np.diag(M)
-    fallback = 1.0 / np.sqrt(float(np.abs(M).max()) or 1.0)
-    with np.errstate(divide="ignore"):
-        D = np.where(diagonal > 0.0, 1.0 / np.sqrt(diagonal), fallback)
-    scaled_q = D * q
+    scaled_M, scaled_q, D = unit_diagonal(M, q)
     q_scale = float(np.abs(scaled_q).max())
-    scaled_M, scaled_q = D[:, None] * M * D[None, :], scaled_q / q_scale
+    scaled_q = scaled_q / q_scale
     best, failure = None, None
     for tolerance in PIVOT_TOLERANCES:  # the looser one only where the first falls short
         try:
@@ -65,6 +61,17 @@ def lemke(M: np.ndarray, q: np.ndarray, max_pivots: int | None = None) -> tuple[
     if best is None:
         raise failure
     return best[0], best[1]
+
+
+def unit_diagonal(M: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(D M D with a unit diagonal, D q, D = diag(M)^-½): the LCP in z = λ / D, where a
+    contact of small flexibility beside a large one weighs the same (a zero diagonal entry
+    takes 1/√ of M's largest entry)."""
+    diagonal = np.diag(M)
+    fallback = 1.0 / np.sqrt(float(np.abs(M).max(initial=0.0)) or 1.0)
+    with np.errstate(divide="ignore"):
+        D = np.where(diagonal > 0.0, 1.0 / np.sqrt(diagonal), fallback)
+    return D[:, None] * M * D[None, :], D * q, D
 
 
 def _lemke(M: np.ndarray, q: np.ndarray, tolerance: float,
@@ -118,4 +125,4 @@ def _lexicographic_ratio(tableau: np.ndarray, column: int, n: int, tolerance: fl
     return int(rows[0])
 
 
-__all__ = ["lemke"]
+__all__ = ["lemke", "unit_diagonal"]
