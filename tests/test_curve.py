@@ -53,3 +53,24 @@ def test_load_path_steps_match_separate_solves():
         assert result.verified
         assert result.contact_force == pytest.approx(alone.contact_force, rel=1e-10, abs=1e-6)
         assert result.u == pytest.approx(alone.u, rel=1e-10, abs=1e-15)
+
+
+def test_a_method_that_cannot_hold_the_scene_is_named_and_the_others_are_drawn():
+    """A node between a "+" and a "−" wall, 0.1 mm each way: equality contact would fix the
+    node twice, so it has no curve and says why; the others step as usual. k = EA/L =
+    210e9·1e-3/1 N/m; the + wall is reached at t* = g k / F, and at t = 1 it pushes with
+    F − k g (the − wall carries nothing)."""
+    E, A, L, F, g = 210e9, 1e-3, 1.0, 5e4, 1e-4
+    k = E * A / L
+    scene = contactqp.Scene(contactqp.Bar.from_areas([A], E, length=L), contactqp.Support(0),
+                            contactqp.Load(1, F),
+                            (contactqp.Wall(1, g, "+"), contactqp.Wall(1, g, "-")))
+    path = load_path(scene, steps=3)
+    assert set(path.failed) == {"equality"}
+    assert "equality" in path.failed["equality"] and "twice" in path.failed["equality"]
+    assert "equality" not in path.methods and "lagrange" in path.methods
+    assert path.to_dict()["failed"] == path.failed
+    assert first_contact_factor(scene) == pytest.approx(g * k / F, rel=1e-12)
+    lagrange = path.methods["lagrange"]
+    assert lagrange.contact_force[-1] == pytest.approx([F - k * g, 0.0], rel=1e-10, abs=1e-6)
+    assert lagrange.verified.all() and lagrange.physical.all()

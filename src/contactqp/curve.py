@@ -17,12 +17,12 @@ factor t* = g / (C K⁻¹ P) of the first contact to close (:func:`first_contact
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from contactqp.errors import OptionError
+from contactqp.errors import ContactqpError, OptionError
 from contactqp.model import Model, build_model, wall_stiffness
 from contactqp.prepared import prepare
 from contactqp.result import Result, plain
@@ -72,12 +72,24 @@ class MethodPath:
 
 @dataclass(frozen=True)
 class LoadPath:
-    """The curves of every method on one scene, on the same load factors."""
+    """The curves of every method on one scene, on the same load factors.
+
+    Attributes
+    ----------
+    scene : the scene stepped.
+    load_factor : the factors (0 to 1) every load was multiplied by.
+    load_node : the global node whose displacement the curves follow
+        (:meth:`Layout.load_point`).
+    methods : name -> the method's curve, for every method that ran.
+    failed : name -> why the method has no curve on this scene (e.g. equality contact at a
+        node between two walls, which it would fix twice); empty when every method ran.
+    """
 
     scene: Scene
     load_factor: np.ndarray
     load_node: int
     methods: dict[str, MethodPath]
+    failed: dict[str, str] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form of ``contactqp curve --json``."""
@@ -90,6 +102,7 @@ class LoadPath:
                                "verified": p.verified.tolist(),
                                "physical": p.physical.tolist()}
                         for name, p in self.methods.items()},
+            "failed": dict(self.failed),
         }
 
 
@@ -113,20 +126,30 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
     """The force–displacement curve of ``scene`` (default scene when None) at ``steps`` load
     factors from 0 to 1, for each of ``methods`` (name -> (method, contact, options); default
     :func:`curve_methods`): each method prepared once and its steps solved as one batch
-    (:meth:`contactqp.Prepared.solve_many`)."""
+    (:meth:`contactqp.Prepared.solve_many`). A method that cannot solve the scene (its error,
+    a :class:`~contactqp.errors.ContactqpError`) has no curve: :attr:`LoadPath.failed` says
+    why, and the other methods are stepped all the same."""
     scene = as_scene(scene)
     factors = _factors(steps)
     model = build_model(scene)
     methods = curve_methods(model) if methods is None else methods
     node = model.layout.load_point()
-    paths = {}
+    paths, failed = {}, {}
     for name, (method, contact, options) in methods.items():
-        prepared = prepare(scene, method, contact, **options)
-        batch = prepared.solve_many(loads=np.outer(factors, prepared.scene_loads))
-        paths[name] = MethodPath(batch.u[:, node], batch.contact_force, batch.penetration,
-                                 batch.verified, batch.physical,
-                                 tuple(batch[step] for step in range(factors.size)))
-    return LoadPath(scene, factors, node, paths)
+        try:
+            paths[name] = _method_path(scene, factors, node, method, contact, options)
+        except ContactqpError as error:
+            failed[name] = str(error)
+    return LoadPath(scene, factors, node, paths, failed)
+
+
+def _method_path(scene: Scene, factors: np.ndarray, node: int, method: str, contact: str,
+                 options: dict[str, Any]) -> MethodPath:
+    """One method's curve: prepared once, its steps solved as one batch."""
+    prepared = prepare(scene, method, contact, **options)
+    batch = prepared.solve_many(loads=np.outer(factors, prepared.scene_loads))
+    return MethodPath(batch.u[:, node], batch.contact_force, batch.penetration, batch.verified,
+                      batch.physical, tuple(batch[step] for step in range(factors.size)))
 
 
 __all__ = [
