@@ -7,6 +7,7 @@ library.
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -29,7 +30,7 @@ from contactqp import (
     Support,
     Wall,
 )
-from contactqp.scene import DistributedLoad
+from contactqp.scene import Circle, DistributedLoad, HollowCircle, Rectangle, section_areas
 
 
 def cone_compliance_of(length: float, d_start: float, d_end: float, modulus: float) -> float:
@@ -40,6 +41,18 @@ def cone_compliance_of(length: float, d_start: float, d_end: float, modulus: flo
 
     value, _ = quad(compliance_density, 0.0, length, epsabs=0.0, epsrel=1e-13)
     return value
+
+
+def quad_compliance(area_at, length: float, modulus: float) -> float:
+    """∫₀ᴸ dx / (E·A(x)) (m/N) by quadrature, for any section ``area_at(x)`` (m²)."""
+    value, _ = quad(lambda x: 1.0 / (modulus * area_at(x)), 0.0, length, epsabs=0.0,
+                    epsrel=1e-13)
+    return value
+
+
+def linear(start: float, end: float, length: float):
+    """x -> the dimension tapering linearly from ``start`` at 0 to ``end`` at ``length``."""
+    return lambda x: start + (end - start) * x / length
 
 
 BAD_OBJECTS = [
@@ -60,6 +73,41 @@ BAD_OBJECTS = [
     (lambda: Bar.from_areas([1e-4], 2e11, lengths=[math.nan]), "bar.lengths[0]", "nan"),
     (lambda: Bar.tapered_circle(1.0, 2, 0.0, 0.01, 2e11), "bar.section.diameter_start", "0.0"),
     (lambda: Bar.tapered_circle(math.inf, 2, 0.02, 0.01, 2e11), "bar.length", "inf"),
+    (lambda: Bar.from_section(HollowCircle(0.04, 0.05), 2e11, length=1.0, elements=2),
+     "bar.section.inner_diameter = 0.05 is not less than outer_diameter = 0.04", None),
+    (lambda: Bar.from_section(HollowCircle((0.05, 0.04), 0.04), 2e11, length=1.0, elements=2),
+     "bar.section.inner_diameter = 0.04 is not less than outer_diameter_end = 0.04", None),
+    (lambda: Bar.from_section(HollowCircle(0.05, (0.0, -0.01)), 2e11, length=1.0, elements=2),
+     "bar.section.inner_diameter_end must be >= 0", "-0.01"),
+    (lambda: Bar.from_section(Rectangle(0.0, 0.01), 2e11, length=1.0, elements=2),
+     "bar.section.width must be > 0", "0.0"),
+    (lambda: Bar.from_section(Rectangle((0.02, -1.0), 0.01), 2e11, length=1.0, elements=2),
+     "bar.section.width_end must be > 0", "-1.0"),
+    (lambda: Bar.from_section(Rectangle(0.02, "1 cm"), 2e11, length=1.0, elements=2),
+     "bar.section.height must be a number", "'1 cm'"),
+    (lambda: Bar.from_section(Circle((0.04, 0.03, 0.02)), 2e11, length=1.0, elements=2),
+     "bar.section.diameter must be one number or a pair (start, end)", "(0.04, 0.03, 0.02)"),
+    (lambda: Bar.from_section("circle", 2e11, length=1.0, elements=2),
+     "bar.section must be a contactqp.scene.Circle, HollowCircle or Rectangle", "'circle'"),
+    (lambda: Bar.from_section(Circle(0.02), 2e11, length=1.0, elements=0), "bar.elements",
+     "0"),
+    (lambda: Bar.from_section(Circle(0.02), 2e11, length=1.0, elements=2, area_rule="mean"),
+     "bar.section.area_rule", "'mean'"),
+    (lambda: Bar.uniform(0.0, 2e11, length=1.0, elements=2), "bar.area must be > 0", "0.0"),
+    (lambda: Bar.uniform([1e-4], 2e11, length=1.0, elements=2), "bar.area must be a number",
+     "[0.0001]"),
+    (lambda: Bar.uniform(1e-4, 2e11, length=1.0),
+     "bar with one area needs length (m) and elements", "or lengths (m, one per element)"),
+    (lambda: Bar.uniform(1e-4, 2e11, lengths=[0.5, -0.5]), "bar.lengths[1]", "-0.5"),
+    (lambda: Bar.uniform(1e-4, 2e11, length=1.0, elements=2, name="bar[3]",
+                         yield_stress=-1.0), "material.yield_stress", "-1.0"),
+    (lambda: Bar.uniform(-1e-4, 2e11, length=1.0, elements=2, name="bar[3]"), "bar[3].area",
+     "-0.0001"),
+    (lambda: Bar.from_areas([1e-4, 0.0], 2e11, length=1.0, name="bar[2]"), "bar[2].areas[1]",
+     "0.0"),
+    (lambda: Bar.from_areas([1e-4, 1e-4], 2e11, lengths=[1.0], name="bar[2]"),
+     "bar[2].lengths has 1 values but bar[2].areas has 2", None),
+    (lambda: Bar.from_areas([], 2e11, length=1.0), "bar must have at least one element", "0"),
     (lambda: Scene(Bar.from_areas([1e-4], 2e11, length=1.0), ()), "support", None),
     (lambda: Scene(Bar.from_areas([1e-4], 2e11, length=1.0), (Support(0),), (Load(2, 1.0),)),
      "load[0].node", "2"),
@@ -170,3 +218,103 @@ def test_bad_array_value_is_shown_as_the_user_wrote_it():
 def test_scene_error_is_a_value_error_and_a_contactqp_error():
     assert issubclass(SceneError, ValueError)
     assert issubclass(SceneError, contactqp.ContactqpError)
+
+
+# --- sections: element areas and stiffnesses against closed forms written here. Glossary:
+# w, h a rectangle's width and height, D, d a tube's outer and inner diameter (m), n the
+# number of equal elements of length l = L/n, k_e = E·A_e/l an element's stiffness (N/m).
+@pytest.mark.parametrize("elements", [1, 3, 8])
+def test_exact_rectangle_tapered_in_width_has_the_closed_form_stiffness(elements):
+    length, h, w0, w1 = 0.5, 0.01, 0.040, 0.020
+    bar = Bar.from_section(Rectangle((w0, w1), h), E_STEEL, length=length, elements=elements,
+                           area_rule="exact")
+    w = [w0 + (w1 - w0) * e / elements for e in range(elements + 1)]
+    piece = length / elements
+    # ∫ dx/(E h w(x)) over an element = l·ln(w_b/w_a)/(E h (w_b − w_a)): its inverse
+    closed = [E_STEEL * h * (wb - wa) / (piece * math.log(wb / wa))
+              for wa, wb in itertools.pairwise(w)]
+    # the library writes the log mean through log1p, the closed form through log: a few ulp
+    np.testing.assert_allclose(bar.element_stiffness, closed, rtol=1e-13)
+
+
+@pytest.mark.parametrize("section, area_at", [
+    (Rectangle((0.040, 0.020), (0.010, 0.030)),
+     lambda x: linear(0.040, 0.020, 2.0)(x) * linear(0.010, 0.030, 2.0)(x)),
+    (Rectangle(0.030, (0.012, 0.004)),
+     lambda x: 0.030 * linear(0.012, 0.004, 2.0)(x)),
+    (HollowCircle((0.050, 0.030), (0.040, 0.010)),
+     lambda x: math.pi * (linear(0.050, 0.030, 2.0)(x) ** 2
+                          - linear(0.040, 0.010, 2.0)(x) ** 2) / 4.0),
+    (HollowCircle(0.050, (0.048, 0.0)),
+     lambda x: math.pi * (0.050**2 - linear(0.048, 0.0, 2.0)(x) ** 2) / 4.0),
+    (Circle((0.020, 0.060)), lambda x: math.pi * linear(0.020, 0.060, 2.0)(x) ** 2 / 4.0),
+], ids=["rectangle-both", "rectangle-height", "tube-both", "tube-to-solid", "circle"])
+@pytest.mark.parametrize("elements", [1, 5])
+def test_exact_rule_gives_every_element_the_compliance_of_its_taper(section, area_at,
+                                                                      elements):
+    bar = Bar.from_section(section, E_STEEL, length=2.0, elements=elements, area_rule="exact")
+    edges = np.linspace(0.0, 2.0, elements + 1)
+    for e, (a, b) in enumerate(itertools.pairwise(edges)):
+        piece, _ = quad(lambda x: 1.0 / (E_STEEL * area_at(x)), a, b, epsabs=0.0,
+                        epsrel=1e-13)
+        # quad on a smooth rational integrand: ~1e-15; a thin wall (48 of 50 mm) costs the
+        # closed form D² − d² a few more digits, still far inside 1e-11
+        assert 1.0 / bar.element_stiffness[e] == pytest.approx(piece, rel=1e-11)
+    assert bar.compliance[-1] == pytest.approx(quad_compliance(area_at, 2.0, E_STEEL),
+                                               rel=1e-11)
+
+
+@pytest.mark.parametrize("section, area_at", [
+    (Rectangle((0.040, 0.020), (0.010, 0.030)),
+     lambda x: linear(0.040, 0.020, 1.0)(x) * linear(0.010, 0.030, 1.0)(x)),
+    (HollowCircle((0.050, 0.030), (0.040, 0.010)),
+     lambda x: math.pi * (linear(0.050, 0.030, 1.0)(x) ** 2
+                          - linear(0.040, 0.010, 1.0)(x) ** 2) / 4.0),
+    (Circle((0.040, 0.020)), lambda x: math.pi * linear(0.040, 0.020, 1.0)(x) ** 2 / 4.0),
+], ids=["rectangle", "tube", "circle"])
+def test_midpoint_rule_takes_the_section_at_mid_element(section, area_at):
+    bar = Bar.from_section(section, E_STEEL, length=1.0, elements=4, area_rule="midpoint")
+    # the library forms c·p·q with p, q the linear factors, here w·h and D² − d²: a few ulp
+    np.testing.assert_allclose(bar.areas, [area_at(x) for x in (0.125, 0.375, 0.625, 0.875)],
+                               rtol=1e-14)
+
+
+@pytest.mark.parametrize("rule", ["midpoint", "exact"])
+def test_uniform_sections_give_their_one_area_by_either_rule(rule):
+    cases = [(Circle(0.02), math.pi * 0.02**2 / 4.0), (Rectangle(0.03, 0.01), 0.03 * 0.01),
+             (HollowCircle(0.05, 0.04), math.pi * (0.05**2 - 0.04**2) / 4.0)]
+    for section, area in cases:
+        # π/4·(D − d)(D + d) against π/4·(D² − d²), rounded apart: a few ulp
+        np.testing.assert_allclose(section_areas(section, 3, rule), [area] * 3, rtol=1e-14)
+
+
+def test_a_tube_without_a_hole_is_the_circle():
+    solid = Bar.from_section(HollowCircle((0.04, 0.02), 0.0), E_STEEL, length=1.0,
+                             elements=4, area_rule="exact")
+    d = np.linspace(0.04, 0.02, 5)
+    np.testing.assert_allclose(solid.areas, math.pi * d[:-1] * d[1:] / 4.0, rtol=1e-14)
+
+
+def test_uniform_bar_tip_moves_f_l_over_e_a():
+    force, length, area = 3e4, 1.5, 2.5e-4
+    bar = Bar.uniform(area, 7e10, length=length, elements=6)
+    assert bar.areas.tolist() == [area] * 6
+    assert bar.lengths.sum() == pytest.approx(length, rel=1e-15)
+    result = contactqp.solve(Scene(bar, (Support(0),), (Load(6, force),)))
+    # a free bar: u_tip = F L / (E A) = 2.571 mm, and u at node j is j/6 of it
+    tip = force * length / (7e10 * area)
+    np.testing.assert_allclose(result.u, tip * np.arange(7) / 6, rtol=1e-13, atol=1e-20)
+
+
+def test_uniform_bar_with_its_own_element_lengths():
+    bar = Bar.uniform(1e-4, E_STEEL, lengths=[0.2, 0.3, 0.5])
+    assert bar.areas.tolist() == [1e-4] * 3
+    np.testing.assert_allclose(bar.element_stiffness, E_STEEL * 1e-4 / np.array([0.2, 0.3, 0.5]),
+                               rtol=1e-15)
+
+
+def test_tapered_circle_is_the_circle_section():
+    tapered = Bar.tapered_circle(1.0, 4, 0.04, 0.02, E_STEEL, area_rule="exact")
+    section = Bar.from_section(Circle((0.04, 0.02)), E_STEEL, length=1.0, elements=4,
+                               area_rule="exact")
+    assert tapered.areas.tolist() == section.areas.tolist()

@@ -2,6 +2,10 @@
 walls and contacts between bars, in one unit system. Description and validation only: the
 algebra (numbering, K, P, C, g) is contactqp.model's.
 
+A bar's elements each have a length, an area and a modulus: given one area per element, one
+area for all, or a section (:class:`Circle`, :class:`HollowCircle`, :class:`Rectangle`, each
+dimension constant or tapering linearly) from which :func:`section_areas` makes them.
+
 Each bar numbers its nodes 0..n along +x; element e joins its nodes e and e + 1; supports,
 loads and walls name a bar (default 0) and a node of it. Every value is checked when the
 scene is built, and an error names the field (as it is spelled in the TOML file) and the
@@ -12,9 +16,10 @@ rigid contact would leave undetermined, is refused (contactqp.feasibility).
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
 import numpy as np
 
@@ -30,27 +35,143 @@ WallSide = Literal["+", "-"]
 AREA_RULES = ("midpoint", "exact")
 WALL_SIDES = ("+", "-")
 MAX_ELEMENTS = 10_000_000  # every element costs ~1 kB across model, solve and check
+Ends = tuple[float, float]  # a dimension at x = 0 and at x = L (m)
 
 
-def circle_areas(diameters_a: np.ndarray, diameters_b: np.ndarray, rule: str) -> np.ndarray:
-    """Element areas (m²) of a circular section whose diameter runs from d_a to d_b linearly.
+Dimension = float | tuple[float, float]
+"""A section's dimension (m): one number along the whole bar, or a pair (at x = 0, at x = L)
+between which it tapers linearly."""
 
-    ``"midpoint"``: the circle at mid-length, π((d_a + d_b)/2)²/4.
-    ``"exact"``: π·d_a·d_b/4, the constant area with the same axial compliance as the cone,
-    since ∫₀ᴸ dx / (E·π·d(x)²/4) = 4L / (E·π·d_a·d_b) for d linear in x.
+
+def _dimension(name: str, value: Any, zero_allowed: bool = False) -> tuple[float, float]:
+    """``value`` (a number, or a pair (start, end)) as its two ends, each a number > 0 (>= 0
+    where ``zero_allowed``); a pair's ends are named ``name_start`` and ``name_end``,
+    as a scene file spells them."""
+    strict = not zero_allowed
+    if isinstance(value, (tuple, list)):
+        if len(value) != 2:
+            raise SceneError(f"{name} must be one number or a pair (start, end), got {value!r}")
+        return (number(f"{name}_start", value[0], minimum=0.0, strict=strict),
+                number(f"{name}_end", value[1], minimum=0.0, strict=strict))
+    one = number(name, value, minimum=0.0, strict=strict)
+    return one, one
+
+
+def _key(name: str, value: Any, end: int) -> str:
+    """How a scene file spells end ``end`` (0 or 1) of dimension ``name`` given as ``value``."""
+    return f"{name}{('_start', '_end')[end]}" if isinstance(value, (tuple, list)) else name
+
+
+@dataclass(frozen=True)
+class Circle:
+    """A solid circular section of ``diameter`` (m): one number, or (at x = 0, at x = L)."""
+
+    diameter: Dimension
+    shape: ClassVar[str] = "circle"
+
+    def _factors(self, name: str) -> tuple[float, Ends, Ends]:
+        d = _dimension(f"{name}.diameter", self.diameter)
+        return math.pi / 4.0, d, d  # A = π/4 · d · d
+
+
+@dataclass(frozen=True)
+class HollowCircle:
+    """A tube: a circle of ``outer_diameter`` with a concentric hole of ``inner_diameter``
+    (m; 0: no hole), each one number or (at x = 0, at x = L); inner < outer at both ends."""
+
+    outer_diameter: Dimension
+    inner_diameter: Dimension
+    shape: ClassVar[str] = "hollow_circle"
+
+    def _factors(self, name: str) -> tuple[float, Ends, Ends]:
+        outer = _dimension(f"{name}.outer_diameter", self.outer_diameter)
+        inner = _dimension(f"{name}.inner_diameter", self.inner_diameter, True)
+        for end in (0, 1):
+            if not inner[end] < outer[end]:
+                raise SceneError(
+                    f"{name}.{_key('inner_diameter', self.inner_diameter, end)} = "
+                    f"{inner[end]!r} is not less than "
+                    f"{_key('outer_diameter', self.outer_diameter, end)} = {outer[end]!r}")
+        # A = π/4 · (D − d)(D + d): a product of two linear factors, as a rectangle's is
+        return (math.pi / 4.0, (outer[0] - inner[0], outer[1] - inner[1]),
+                (outer[0] + inner[0], outer[1] + inner[1]))
+
+
+@dataclass(frozen=True)
+class Rectangle:
+    """A solid rectangular section ``width`` × ``height`` (m), each one number or
+    (at x = 0, at x = L)."""
+
+    width: Dimension
+    height: Dimension
+    shape: ClassVar[str] = "rectangle"
+
+    def _factors(self, name: str) -> tuple[float, Ends, Ends]:
+        return (1.0, _dimension(f"{name}.width", self.width),
+                _dimension(f"{name}.height", self.height))
+
+
+Section = Circle | HollowCircle | Rectangle
+SECTIONS: dict[str, type[Section]] = {kind.shape: kind for kind in (Circle, HollowCircle, Rectangle)}
+
+
+def section_areas(section: Section, elements: int, rule: str,
+                  name: str = "bar.section") -> np.ndarray:
+    """Element areas (m²) of ``elements`` equal elements along ``section``; ``name``: how
+    messages name the section (as a scene file spells it).
+
+    Every section's area is c·p(x)·q(x) with p and q linear in x (a circle d·d, a tube
+    (D − d)(D + d), a rectangle w·h). ``rule``:
+
+    ``"midpoint"``: the section at each element's mid-length, c·p_m·q_m.
+    ``"exact"``: the constant area with the element's own axial compliance,
+    L / ∫₀ᴸ dx/A(x) = c·M(p_b·q_a, p_a·q_b), M the logarithmic mean (x − y)/ln(x/y), since
+    ∫₀¹ dt/(p(t)q(t)) = ln(p_b q_a/(p_a q_b))/(p_b q_a − p_a q_b). A circle: π·d_a·d_b/4; a
+    rectangle tapered in width only: h·(w_b − w_a)/ln(w_b/w_a). A bar of exact elements has
+    the compliance of the continuous taper, whatever the mesh.
     """
+    if rule not in AREA_RULES:
+        raise SceneError(f"{name}.area_rule must be one of {AREA_RULES}, got {rule!r}")
+    if not isinstance(section, tuple(SECTIONS.values())):
+        raise SceneError(f"{name} must be a contactqp.scene.Circle, HollowCircle or Rectangle, "
+                         f"got {section!r}")
+    scale, p_ends, q_ends = section._factors(name)
+    p = np.linspace(*p_ends, elements + 1)
+    q = np.linspace(*q_ends, elements + 1)
     if rule == "midpoint":
-        return np.pi * (0.5 * (diameters_a + diameters_b)) ** 2 / 4.0
-    if rule == "exact":
-        return np.pi * diameters_a * diameters_b / 4.0
-    raise SceneError(f"bar.section.area_rule must be one of {AREA_RULES}, got {rule!r}")
+        return scale * (0.5 * (p[:-1] + p[1:]) * (0.5 * (q[:-1] + q[1:])))
+    return scale * _log_mean(p[1:] * q[:-1], p[:-1] * q[1:])
+
+
+def _log_mean(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """(x − y)/ln(x/y) of positive x, y, and y where x = y: written y·u/log1p(u) with
+    u = x/y − 1, which stays accurate as x → y, where the quotient itself is 0/0."""
+    u = (x - y) / y
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mean = y * u / np.log1p(u)
+    return np.where(u == 0.0, y, mean)
+
+
+def _equal_lengths(name: str, length: Any, elements: Any) -> np.ndarray:
+    """``elements`` equal element lengths (m) over ``length`` (m), both checked."""
+    total = number(f"{name}.length", length, minimum=0.0, strict=True)
+    elements = whole_number(f"{name}.elements", elements, 1)
+    if elements > MAX_ELEMENTS:
+        raise SceneError(f"{name}.elements = {elements}: contactqp takes at most {MAX_ELEMENTS} "
+                         "elements in a scene")
+    return np.full(elements, total / elements)
 
 
 @dataclass(frozen=True, eq=False)
 class Bar:
-    """Elements between consecutive nodes, each with a length (m), area (m²) and modulus (Pa).
+    """Elements between consecutive nodes, each with a length (m), area (m²) and modulus (Pa),
+    and the bar's yield stress (Pa, optional: only compared with the stresses, which are
+    flagged beyond it).
 
-    Build one with :meth:`from_areas` or :meth:`tapered_circle`; the arrays are read-only.
+    Build one with :meth:`uniform` (one area), :meth:`from_section` (a circle, tube or
+    rectangle, uniform or tapered), :meth:`tapered_circle` or :meth:`from_areas` (one area per
+    element); the arrays are read-only. Each constructor takes ``name``: how its messages name
+    the bar (``"bar[1]"``, as a scene file does).
     """
 
     lengths: np.ndarray
@@ -59,8 +180,24 @@ class Bar:
     yield_stress: float | None = None
 
     def __post_init__(self) -> None:
-        lengths = positive_numbers("bar.lengths", self.lengths, MAX_ELEMENTS)
-        areas = positive_numbers("bar.areas", self.areas, MAX_ELEMENTS)
+        self._check("bar")
+
+    @classmethod
+    def _named(cls, name: str, lengths: Any, areas: Any, youngs_modulus: Any,
+               yield_stress: Any) -> Bar:
+        """A bar made without __init__, so that its one check names it ``name``."""
+        bar = object.__new__(cls)
+        for key, value in (("lengths", lengths), ("areas", areas),
+                           ("youngs_modulus", youngs_modulus), ("yield_stress", yield_stress)):
+            object.__setattr__(bar, key, value)
+        bar._check(name)
+        return bar
+
+    def _check(self, name: str) -> None:
+        """Check every value, naming the field as ``name``'s table in a scene file spells it,
+        and keep the arrays read-only."""
+        lengths = positive_numbers(f"{name}.lengths", self.lengths, MAX_ELEMENTS)
+        areas = positive_numbers(f"{name}.areas", self.areas, MAX_ELEMENTS)
         moduli = positive_numbers("material.youngs_modulus", self.youngs_modulus,
                                   MAX_ELEMENTS)
         if moduli.size not in (1, areas.size):
@@ -69,13 +206,13 @@ class Bar:
                 f"got {moduli.size}"
             )
         moduli = np.broadcast_to(moduli, areas.shape)
+        if areas.size == 0:
+            raise SceneError(f"{name} must have at least one element, got 0")
         if lengths.size != areas.size:
             raise SceneError(
-                f"bar.lengths has {lengths.size} values but bar.areas has {areas.size}: "
+                f"{name}.lengths has {lengths.size} values but {name}.areas has {areas.size}: "
                 "give one length per element"
             )
-        if areas.size == 0:
-            raise SceneError("bar must have at least one element, got 0")
         if self.yield_stress is not None:
             object.__setattr__(
                 self, "yield_stress",
@@ -94,16 +231,62 @@ class Bar:
         length: float | None = None,
         lengths: Any = None,
         yield_stress: float | None = None,
+        name: str = "bar",
     ) -> Bar:
         """A bar from explicit element areas (m²), with equal elements over ``length`` (m) or
         explicit element ``lengths`` (m)."""
-        areas = positive_numbers("bar.areas", areas, MAX_ELEMENTS)
+        areas = positive_numbers(f"{name}.areas", areas, MAX_ELEMENTS)
         if (length is None) == (lengths is None):
-            raise SceneError("bar needs exactly one of length (m) or lengths (one per element)")
+            raise SceneError(f"{name} needs exactly one of length (m) or lengths (one per "
+                             "element)")
         if lengths is None:
-            total = number("bar.length", length, minimum=0.0, strict=True)
-            lengths = np.full(areas.size, total / max(areas.size, 1))
-        return cls(lengths, areas, youngs_modulus, yield_stress)
+            lengths = _equal_lengths(name, length, max(areas.size, 1))
+        return cls._named(name, lengths, areas, youngs_modulus, yield_stress)
+
+    @classmethod
+    def uniform(
+        cls,
+        area: float,
+        youngs_modulus: float,
+        *,
+        length: float | None = None,
+        elements: int | None = None,
+        lengths: Any = None,
+        yield_stress: float | None = None,
+        name: str = "bar",
+    ) -> Bar:
+        """A bar of one ``area`` (m²) in every element: ``elements`` equal elements over
+        ``length`` (m), or explicit element ``lengths`` (m)."""
+        area = number(f"{name}.area", area, minimum=0.0, strict=True)
+        if lengths is not None and length is None and elements is None:
+            lengths = positive_numbers(f"{name}.lengths", lengths, MAX_ELEMENTS)
+        elif lengths is None and length is not None and elements is not None:
+            lengths = _equal_lengths(name, length, elements)
+        else:
+            raise SceneError(f"{name} with one area needs length (m) and elements, or lengths "
+                             "(m, one per element)")
+        return cls._named(name, lengths, np.full(lengths.size, area), youngs_modulus,
+                          yield_stress)
+
+    @classmethod
+    def from_section(
+        cls,
+        section: Section,
+        youngs_modulus: float,
+        *,
+        length: float,
+        elements: int,
+        area_rule: AreaRule = "midpoint",
+        yield_stress: float | None = None,
+        name: str = "bar",
+    ) -> Bar:
+        """``elements`` equal elements over ``length`` (m) of a :class:`Circle`,
+        :class:`HollowCircle` or :class:`Rectangle` section, each dimension constant or
+        tapering linearly from x = 0 to x = ``length``; areas by ``area_rule``
+        (:func:`section_areas`: ``"midpoint"`` or ``"exact"``)."""
+        lengths = _equal_lengths(name, length, elements)
+        areas = section_areas(section, lengths.size, area_rule, f"{name}.section")
+        return cls._named(name, lengths, areas, youngs_modulus, yield_stress)
 
     @classmethod
     def tapered_circle(
@@ -116,19 +299,14 @@ class Bar:
         *,
         area_rule: AreaRule = "midpoint",
         yield_stress: float | None = None,
+        name: str = "bar",
     ) -> Bar:
         """Equal elements over a circular section tapering linearly from ``diameter_start``
-        at x = 0 to ``diameter_end`` at x = ``length`` (m); areas by ``area_rule``."""
-        total = number("bar.length", length, minimum=0.0, strict=True)
-        elements = whole_number("bar.elements", elements, 1)
-        if elements > MAX_ELEMENTS:
-            raise SceneError(f"bar.elements = {elements}: contactqp takes at most {MAX_ELEMENTS} "
-                             "elements in a scene")
-        d0 = number("bar.section.diameter_start", diameter_start, minimum=0.0, strict=True)
-        d1 = number("bar.section.diameter_end", diameter_end, minimum=0.0, strict=True)
-        edges = np.linspace(d0, d1, int(elements) + 1)
-        areas = circle_areas(edges[:-1], edges[1:], area_rule)
-        return cls(np.full(int(elements), total / int(elements)), areas, youngs_modulus, yield_stress)
+        at x = 0 to ``diameter_end`` at x = ``length`` (m); areas by ``area_rule``: the same
+        as :meth:`from_section` with ``Circle((diameter_start, diameter_end))``."""
+        return cls.from_section(Circle((diameter_start, diameter_end)), youngs_modulus,
+                                length=length, elements=elements, area_rule=area_rule,
+                                yield_stress=yield_stress, name=name)
 
     @property
     def n_elements(self) -> int:
@@ -475,6 +653,7 @@ def _check_contacts(scene: Scene, node, held: dict[int, int],
 
 
 __all__ = [
-    "AREA_RULES", "MAX_ELEMENTS", "UNIT_SYSTEMS", "WALL_SIDES", "Bar", "BarContact",
-    "DistributedLoad", "Load", "Scene", "Support", "Units", "Wall", "circle_areas",
+    "AREA_RULES", "MAX_ELEMENTS", "SECTIONS", "UNIT_SYSTEMS", "WALL_SIDES", "Bar", "BarContact",
+    "Circle", "Dimension", "DistributedLoad", "HollowCircle", "Load", "Rectangle", "Scene",
+    "Section", "Support", "Units", "Wall", "section_areas",
 ]
