@@ -1,15 +1,36 @@
-"""Charts (matplotlib only; never imported by ``contactqp/__init__``). Functions return Axes."""
+"""Charts (matplotlib only, never pyplot; never imported by ``contactqp/__init__``).
+
+Each function draws what it is given on a Figure of its own (no global state, no GUI backend)
+and returns its Axes or Figure. Every chart states its scene, its units and its methods, and
+marks what failed: a red × where a solve raised or failed its check, open markers where an
+answer was flagged. Artists a reader's script (or a test) may look for carry a ``gid``, e.g.
+``"undeformed bar 1 element 0"``, ``"wall 0"``, ``"contact 0 deformed"``.
+"""
 
 from __future__ import annotations
+
+import math
+import textwrap
+from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from matplotlib.patches import Rectangle
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch, Rectangle
+from matplotlib.transforms import blended_transform_factory
 
 from contactqp.curve import LoadPath
+from contactqp.methods.augmented import DEFAULT_MAX_ITERATIONS
+from contactqp.methods.penalty import TEXTBOOK_PENALTY
 from contactqp.result import Result
-from contactqp.studies import MeshConvergence, NitscheSweep, PenaltySweep
+from contactqp.studies import MeshConvergence, NitscheSweep, PenaltySweep, Run
+
+FLOOR = 1e-17  # errors of exactly 0 are drawn here, on a log axis
+FAILED = {"marker": "x", "color": "tab:red", "markersize": 9, "mew": 2, "ls": ""}
+PREFIXES = {-2: "µ", -1: "m", 0: "", 1: "k", 2: "M", 3: "G"}
+WALL, SUPPORT, LOAD, CONTACT = "tab:red", "black", "tab:green", "tab:purple"
 
 
 def _axes(ax: Axes | None, size: tuple[float, float] = (8, 3.5)) -> Axes:
@@ -17,136 +38,588 @@ def _axes(ax: Axes | None, size: tuple[float, float] = (8, 3.5)) -> Axes:
     return Figure(figsize=size, layout="constrained").subplots() if ax is None else ax
 
 
+def round_125(value: float) -> float:
+    """The largest 1, 2 or 5 × 10ᵏ not above ``value`` (> 0): a magnification a reader can
+    take in at a glance (×500, not ×909)."""
+    power = 10.0 ** math.floor(math.log10(value))
+    return max(step * power for step in (1.0, 2.0, 5.0) if step * power <= value * (1 + 1e-12))
+
+
+def engineering(value: float, unit: str) -> str:
+    """``value`` with 4 significant digits and an SI prefix on ``unit``: '175.9 kN', '6 kN'."""
+    if value == 0.0 or not math.isfinite(value):
+        return f"{value:g} {unit}"
+    power = min(max(math.floor(math.log10(abs(value)) / 3), -2), 3)
+    return f"{value / 1000.0 ** power:.4g} {PREFIXES[power]}{unit}"
+
+
+def _failed_at_bottom(ax: Axes, x: np.ndarray, label: str | None) -> None:
+    """A red × at the bottom edge of ``ax`` for each x: a run that has no value to draw."""
+    if len(x):
+        ax.plot(x, np.full(len(x), 0.02), transform=blended_transform_factory(ax.transData,
+                ax.transAxes), clip_on=False, label=label, **FAILED)
+
+
+# --- the bars --------------------------------------------------------------------------------
+
+ROW_GAP = 0.6  # between the undeformed rows and the deformed ones, in rows
+THICKEST = 0.28  # half the height of the thickest element, in rows
+
+
+def bar_magnification(result: Result) -> float:
+    """The default magnification of :func:`plot_bar`: a 1-2-5 number (:func:`round_125`) at
+    which the largest displacement or gap is drawn at most a tenth of the longest bar."""
+    largest = max(float(np.abs(result.u).max(initial=0.0)),
+                  float(np.abs(result.layout.gaps).max(initial=0.0)))
+    return round_125(0.1 * result.layout.longest_bar / largest) if largest > 0 else 1.0
+
+
+def bar_positions(result: Result, magnification: float) -> tuple[np.ndarray, np.ndarray]:
+    """(x of each bar's node 0, the row each bar is drawn on). A bar contact puts node_b
+    ``gap`` × ``magnification`` beyond node_a; a bar no contact places starts at 0. Bars
+    whose undeformed extents overlap are drawn on separate rows."""
+    scene = result.scene
+    starts: list[float | None] = [None] * len(scene.bars)
+    for root in range(len(scene.bars)):
+        if starts[root] is None:
+            starts[root] = 0.0
+            _place_through_contacts(scene, starts, magnification)
+    lengths = np.array([b.node_x[-1] for b in scene.bars])
+    tolerance = 1e-9 * float(lengths.max())
+    rows: list[list[tuple[float, float]]] = []
+    row_of = []
+    for start, length in zip(starts, lengths):
+        span = (start, start + length)
+        row = next((r for r, taken in enumerate(rows) if all(
+            span[1] <= lo + tolerance or span[0] >= hi - tolerance for lo, hi in taken)),
+            len(rows))
+        if row == len(rows):
+            rows.append([])
+        rows[row].append(span)
+        row_of.append(row)
+    return np.array(starts, dtype=float), np.array(row_of)
+
+
+def _place_through_contacts(scene, starts: list, magnification: float) -> None:
+    """Place every bar a chain of contacts joins to a placed one (``starts`` filled in)."""
+    placed = True
+    while placed:
+        placed = False
+        for c in scene.contacts:
+            xa, xb = scene.bars[c.bar_a].node_x[c.node_a], scene.bars[c.bar_b].node_x[c.node_b]
+            if starts[c.bar_a] is not None and starts[c.bar_b] is None:
+                starts[c.bar_b] = starts[c.bar_a] + xa + magnification * c.gap - xb
+                placed = True
+            elif starts[c.bar_b] is not None and starts[c.bar_a] is None:
+                starts[c.bar_a] = starts[c.bar_b] + xb - magnification * c.gap - xa
+                placed = True
+
+
+@dataclass(frozen=True, eq=False)
+class _Sketch:
+    """Where plot_bar draws each node: x (undeformed or deformed) and the y of its row."""
+
+    result: Result
+    magnification: float
+
+    @cached_property
+    def positions(self) -> tuple[np.ndarray, np.ndarray]:
+        return bar_positions(self.result, self.magnification)
+
+    @property
+    def n_rows(self) -> int:
+        return int(self.positions[1].max()) + 1
+
+    def x(self, deformed: bool) -> np.ndarray:
+        """x of every global node."""
+        layout = self.result.layout
+        local = np.concatenate([b.node_x for b in self.result.scene.bars])
+        start = np.repeat(self.positions[0], np.diff(layout.node_offsets))
+        return start + local + (self.magnification * self.result.u if deformed else 0.0)
+
+    def y(self, deformed: bool) -> np.ndarray:
+        """y of every global node's row: the undeformed rows from 0 down, then the deformed."""
+        row = self.positions[1][self.result.layout.node_bar]
+        return -(row + (self.n_rows + ROW_GAP if deformed else 0.0))
+
+    @cached_property
+    def half(self) -> np.ndarray:
+        """Half the drawn height of each element (∝ √area, the thickest THICKEST rows)."""
+        areas = self.result.layout.areas
+        return np.maximum(THICKEST * np.sqrt(areas / areas.max()), 0.06)
+
+    @cached_property
+    def node_half(self) -> np.ndarray:
+        """Half the drawn height at each global node: its thicker element's."""
+        layout = self.result.layout
+        half = np.zeros(layout.n_nodes)
+        start = layout.elements[0]
+        np.maximum.at(half, start, self.half)
+        np.maximum.at(half, start + 1, self.half)
+        return half
+
+    @cached_property
+    def width(self) -> float:
+        """The x extent of everything drawn (for sizes of glyphs)."""
+        x = np.concatenate((self.x(False), self.x(True), self.wall_x))
+        return float(np.ptp(x)) or 1.0
+
+    @cached_property
+    def wall_x(self) -> np.ndarray:
+        """x of every wall: its node's undeformed x plus sign × gap, magnified."""
+        layout, scene = self.result.layout, self.result.scene
+        x = self.x(False)
+        return np.array([x[layout.node(w.bar, w.node)] + w.sign * self.magnification * w.gap
+                         for w in scene.walls])
+
+
 def plot_bar(result: Result, ax: Axes | None = None, magnification: float | None = None) -> Axes:
-    """The undeformed bar (grey) and the deformed one (blue), displacements magnified, with the
-    walls at their gaps (same magnification) and the supports."""
-    ax = _axes(ax)
-    scene, layout = result.scene, result.layout
-    x = layout.node_x  # the bars end to end
-    first = np.delete(np.arange(layout.n_nodes - 1), layout.junctions)  # each element's first node
-    largest = max(float(np.abs(result.u).max()), max((w.gap for w in result.scene.walls), default=0))
-    if magnification is None:
-        magnification = 0.1 * x[-1] / largest if largest > 0 else 1.0
-    half = np.sqrt(layout.areas / np.pi)  # radius of the equivalent circle
-    depth = 2.5 * half.max()
-    for row, (nodes, colour, name) in enumerate(
-        ((x, "0.75", "undeformed"), (x + magnification * result.u, "tab:blue", "deformed"))
-    ):
-        y = -row * depth
-        for e, j in enumerate(first):
-            ax.add_patch(Rectangle((nodes[j], y - half[e]), nodes[j + 1] - nodes[j], 2 * half[e],
-                                   facecolor=colour, edgecolor="k", linewidth=0.5,
-                                   label=name if e == 0 else None))
-        ax.plot(nodes, np.full(nodes.size, y), "k.", markersize=4)
-    top, bottom = half.max() * 1.3, -depth - half.max() * 1.3
-    for i, wall in enumerate(result.scene.walls):
-        at = x[layout.node(wall.bar, wall.node)] + wall.sign * magnification * wall.gap
-        ax.plot([at, at], [bottom, top], color="tab:red", linewidth=2.5,
-                label="wall" if i == 0 else None)
-        ax.annotate(f"{result.contact_force[i]:.4g} N", (at, top), color="tab:red",
-                    ha="left" if wall.side == "+" else "right", va="bottom", fontsize=8)
-    for s in result.scene.supports:
-        ax.plot([x[layout.node(s.bar, s.node)]] * 2, [bottom, top], color="k", linewidth=4,
-                label="support" if s is result.scene.supports[0] else None)
-    ax.set_xlim(x[0] - 0.05 * x[-1], x[-1] * 1.05 + magnification * largest)
-    ax.set_ylim(bottom * 1.2, top * 1.6)
-    ax.set_xlabel(f"x ({scene.unit.length}); displacements and gaps magnified "
-                  f"×{magnification:.3g}")
-    ax.set_yticks([])
-    ax.set_title(f"{result.scene.name}: {result.label}, {result.contact} contact")
-    ax.legend(loc="lower right", fontsize=8, ncols=4)
+    """The scene as it is before (top rows) and after loading (bottom rows): the bars, each
+    element as tall as √ of its area; supports (black, hatched on the held side); loads
+    (green arrows); walls (red, hatched on the wall's side: across the bar beyond an end
+    node, as a stop above the bar at any other node); contacts between bars (purple: the face
+    of node_a drawn at bar b's height); every displacement and gap magnified by
+    ``magnification`` (default :func:`bar_magnification`, a 1-2-5 number). Bars whose
+    extents overlap are drawn on separate rows. The deformed rows give each contact force
+    that is not zero; the title says whether the answer was verified."""
+    ax = _axes(ax, (9, 3.2 + 0.9 * _rows(result)))
+    sketch = _Sketch(result, bar_magnification(result) if magnification is None
+                     else float(magnification))
+    for deformed in (False, True):
+        _draw_elements(ax, sketch, deformed)
+        _draw_supports(ax, sketch, deformed)
+        _draw_walls(ax, sketch, deformed)
+        _draw_contacts(ax, sketch, deformed)
+        _draw_point_loads(ax, sketch, deformed)
+    _draw_distributed_loads(ax, sketch)
+    _frame_bar_chart(ax, sketch)
     return ax
 
 
+def _rows(result: Result) -> int:
+    return 1 if len(result.scene.bars) == 1 else int(bar_positions(result, 1.0)[1].max()) + 1
+
+
+def _draw_elements(ax: Axes, sketch: _Sketch, deformed: bool) -> None:
+    layout = sketch.result.layout
+    x, y = sketch.x(deformed), sketch.y(deformed)
+    state = "deformed" if deformed else "undeformed"
+    colour = "tab:blue" if deformed else "0.82"
+    bar, first = layout.node_bar, layout.node_offsets
+    for e, (j, half) in enumerate(zip(layout.elements[0], sketch.half)):
+        b = int(bar[j])
+        ax.add_patch(Rectangle((x[j], y[j] - half), x[j + 1] - x[j], 2 * half,
+                               facecolor=colour, edgecolor="k", linewidth=0.5, alpha=0.9,
+                               gid=f"{state} bar {b} element {j - first[b]}"))
+    ax.plot(x, y, "k.", markersize=3, ls="")
+
+
+def _hatch(ax: Axes, x: float, y0: float, y1: float, width: float, colour: str,
+           gid: str) -> None:
+    """A line from (x, y0) to (x, y1) with hatching ``width`` wide (negative: to the left)."""
+    ax.plot([x, x], [y0, y1], color=colour, linewidth=2.2, gid=gid, solid_capstyle="butt")
+    ax.add_patch(Rectangle((min(x, x + width), y0), abs(width), y1 - y0, facecolor="none",
+                           edgecolor=colour, hatch="////", linewidth=0))
+
+
+def _draw_supports(ax: Axes, sketch: _Sketch, deformed: bool) -> None:
+    layout = sketch.result.layout
+    x, y = sketch.x(deformed), sketch.y(deformed)
+    first, last = layout.bar_ends
+    w = 0.015 * sketch.width
+    for i, j in enumerate(layout.support_nodes):
+        reach = sketch.node_half[j] + 0.1
+        side = -w if j == first[j] else (w if j == last[j] else 0.0)
+        if side:
+            _hatch(ax, x[j], y[j] - reach, y[j] + reach, side, SUPPORT, f"support {i}")
+        else:  # an inner node: held from below
+            ax.plot([x[j]] * 2, [y[j] - reach, y[j] + reach], color=SUPPORT, linewidth=2.2,
+                    gid=f"support {i}")
+            ax.add_patch(Rectangle((x[j] - w, y[j] - reach - 0.1), 2 * w, 0.1,
+                                   facecolor="none", edgecolor=SUPPORT, hatch="////"))
+
+
+def _draw_walls(ax: Axes, sketch: _Sketch, deformed: bool) -> None:
+    """Walls do not move: the same x in both rows. Beyond an end node a wall crosses the bar's
+    axis; at any other node it is a stop above the bar, and a tab on the node reaches it."""
+    result = sketch.result
+    layout = result.layout
+    x, y = sketch.x(deformed), sketch.y(deformed)
+    first, last = layout.bar_ends
+    w = 0.02 * sketch.width
+    for i, wall in enumerate(result.scene.walls):
+        j = layout.node(wall.bar, wall.node)
+        half = sketch.node_half[j]
+        outside = j == (last[j] if wall.side == "+" else first[j])
+        y0, y1 = (y[j] - half - 0.1, y[j] + half + 0.1) if outside else (
+            y[j] + half + 0.04, y[j] + half + 0.4)
+        state = "deformed" if deformed else "undeformed"
+        _hatch(ax, sketch.wall_x[i], y0, y1, wall.sign * w, WALL, f"wall {i} {state}")
+        if not outside:
+            ax.plot([x[j]] * 2, [y[j], y0 + 0.12], color=WALL, linewidth=1.2)
+        if deformed:
+            _force_label(ax, sketch, result.contact_force[i], sketch.wall_x[i], y1)
+
+
+def _draw_contacts(ax: Axes, sketch: _Sketch, deformed: bool) -> None:
+    """A contact between bars: node_a's face drawn at bar b's height (with a lug from bar a
+    when the two bars are on different rows), node_b ``gap`` (magnified) beyond it."""
+    result = sketch.result
+    layout = result.layout
+    x, y = sketch.x(deformed), sketch.y(deformed)
+    state = "deformed" if deformed else "undeformed"
+    for i, c in enumerate(result.scene.contacts):
+        a, b = layout.node(c.bar_a, c.node_a), layout.node(c.bar_b, c.node_b)
+        reach = sketch.node_half[b] + 0.1
+        if y[a] != y[b]:
+            ax.plot([x[a]] * 2, [y[a], y[b]], color=CONTACT, linewidth=1.2)
+        ax.plot([x[a]] * 2, [y[b] - reach, y[b] + reach], color=CONTACT, linewidth=2.2,
+                gid=f"contact {i} {state}")
+        ax.plot([x[b]], [y[b]], "o", color=CONTACT, markersize=4)
+        if deformed:  # above the face; beside the lug, between the rows, when there is one
+            row = len(result.scene.walls) + i
+            at = (x[a], y[b] + reach) if y[a] == y[b] else (x[a], 0.5 * (y[a] + y[b]))
+            _force_label(ax, sketch, result.contact_force[row], *at,
+                         ha=None if y[a] == y[b] else "right")
+
+
+def _force_label(ax: Axes, sketch: _Sketch, force: float, x: float, y: float,
+                 ha: str | None = None) -> None:
+    """The force a contact carries, above it; none where it carries nothing (an open
+    contact); red and 'pulls' where it pulls (not physical)."""
+    result = sketch.result
+    tiny = 1e-9 * result.force_scale
+    if abs(force) <= tiny:
+        return
+    centre = float(np.median(sketch.x(False)))
+    text = engineering(force, result.scene.unit.force)
+    ax.annotate(text if force > 0 else f"pulls: {text}", (x, y),
+                xytext=(-3, 0) if ha == "right" else (0, 2),
+                textcoords="offset points", fontsize=8, va="bottom",
+                ha=ha or ("right" if x > centre else "left"),
+                color="k" if force > 0 else "tab:red",
+                fontweight="normal" if force > 0 else "bold")
+
+
+def _draw_point_loads(ax: Axes, sketch: _Sketch, deformed: bool) -> None:
+    """An arrow below the bar (walls and contact forces are above it) from the loaded node,
+    along the load, labelled in the upper rows."""
+    result = sketch.result
+    layout = result.layout
+    x, y = sketch.x(deformed), sketch.y(deformed)
+    length = 0.06 * sketch.width
+    for i, (j, load) in enumerate(zip(layout.load_nodes, result.scene.loads)):
+        height = y[j] - sketch.node_half[j] - 0.12
+        tip = x[j] + math.copysign(length, load.force)
+        ax.annotate("", (tip, height), (x[j], height),
+                    gid=f"load {i} {'deformed' if deformed else 'undeformed'}",
+                    arrowprops={"arrowstyle": "-|>", "color": LOAD, "linewidth": 1.8})
+        ax.plot([x[j]] * 2, [y[j], height], color=LOAD, linewidth=1)
+        if not deformed:
+            ax.annotate(engineering(load.force, result.scene.unit.force),
+                        (0.5 * (x[j] + tip), height), xytext=(0, -2), textcoords="offset points",
+                        ha="center", va="top", fontsize=8, color=LOAD)
+
+
+def _draw_distributed_loads(ax: Axes, sketch: _Sketch) -> None:
+    """Small arrows below the elements a distributed load covers (upper rows), labelled q."""
+    result = sketch.result
+    layout, unit = result.layout, result.scene.unit
+    x, y = sketch.x(False), sketch.y(False)
+    for i, q in enumerate(result.scene.distributed):
+        bar = result.scene.bars[q.bar]
+        start = layout.node(q.bar, q.start)
+        stop = layout.node(q.bar, bar.n_elements if q.stop is None else q.stop)
+        height = y[start] - sketch.node_half[start:stop + 1].max() - 0.12
+        length = math.copysign(min(0.04 * sketch.width, 0.5 * (x[stop] - x[start])), q.intensity)
+        for tail in np.linspace(x[start], x[stop] - length, 6 if q.stop is None else 4):
+            ax.annotate("", (tail + length, height), (tail, height), gid=f"distributed load {i}",
+                        arrowprops={"arrowstyle": "-|>", "color": LOAD, "linewidth": 1})
+        ax.annotate(f"q = {engineering(q.intensity, unit.stiffness)}",
+                    (0.5 * (x[start] + x[stop]), height), xytext=(0, -3),
+                    textcoords="offset points", ha="center", va="top", fontsize=8,
+                    color=LOAD)
+
+
+def _frame_bar_chart(ax: Axes, sketch: _Sketch) -> None:
+    """Limits with room for the labels, the rows named, the title with the verdict, and the
+    legend beside the axes (where it crosses nothing)."""
+    result, m = sketch.result, sketch.magnification
+    scene = result.scene
+    x = np.concatenate((sketch.x(False), sketch.x(True), sketch.wall_x))
+    margin = 0.08 * sketch.width
+    ax.set_xlim(x.min() - margin, x.max() + margin)
+    rows = sketch.n_rows
+    ax.set_ylim(-(2 * rows + ROW_GAP - 1) - 0.75, 0.8)
+    ticks, names = [], []
+    for deformed, state in ((False, "undeformed"), (True, "deformed")):
+        for row in range(rows):
+            bars = np.flatnonzero(sketch.positions[1] == row)
+            ticks.append(-(row + (rows + ROW_GAP if deformed else 0.0)))
+            names.append(state if len(scene.bars) == 1 else
+                         f"{state}\nbar{'s' if bars.size > 1 else ''} "
+                         f"{', '.join(map(str, bars))}")
+    ax.set_yticks(ticks, names, fontsize=8)
+    ax.tick_params(axis="y", length=0)
+    ax.set_xlabel(f"x ({scene.unit.length}); displacements and gaps magnified ×{m:g}")
+    verdict, colour = _verdict(result)
+    ax.set_title(f"{scene.name}\n{result.label}, {result.contact} contact: {verdict}",
+                 fontsize=10, color=colour)
+    ax.legend(handles=_bar_legend(result), loc="center left", bbox_to_anchor=(1.01, 0.5),
+              fontsize=8, frameon=False)
+
+
+def _verdict(result: Result) -> tuple[str, str]:
+    """What the check found, short enough for a title (its first finding, then '…')."""
+    first, *more = result.message.split("; ")
+    found = textwrap.shorten(first + (" …" if more else ""), 90, placeholder=" …")
+    if not result.verified:
+        return f"NOT verified: {found}", "tab:red"
+    if not result.physical:
+        return f"verified, but {found}", "tab:red"
+    return "verified; labels: contact forces", "k"
+
+
+def _bar_legend(result: Result) -> list:
+    scene = result.scene
+    handles = [Patch(facecolor="0.82", edgecolor="k", label="undeformed"),
+               Patch(facecolor="tab:blue", edgecolor="k", label="deformed"),
+               Line2D([], [], color=SUPPORT, linewidth=2.2, label="support")]
+    if scene.loads or scene.distributed:
+        handles.append(Line2D([], [], color=LOAD, marker=">", label="load"))
+    if scene.walls:
+        handles.append(Line2D([], [], color=WALL, linewidth=2.2, label="wall (hatched side)"))
+    if scene.contacts:
+        handles.append(Line2D([], [], color=CONTACT, linewidth=2.2, marker="o", markersize=4,
+                              label="contact: face of node a, node b"))
+    return handles
+
+
+# --- studies ---------------------------------------------------------------------------------
+
+def _run_marks(ax: Axes, x: np.ndarray, y: np.ndarray, runs: tuple[Run, ...], colour: str,
+               style: str, name: str, zero: bool = True) -> None:
+    """A line through the runs that ran, filled markers where verified, open where flagged,
+    and a red × at the bottom where the solve raised. Values of 0 are drawn at FLOOR, or
+    (``zero`` False: a penetration, where <= 0 means none) not at all."""
+    failed = np.array([r.result is None for r in runs]) | np.isnan(y)
+    ran = ~failed & (np.isfinite(y) if zero else y > 0.0)
+    good = ran & np.array([r.result is not None and r.result.verified for r in runs])
+    y = np.maximum(y, FLOOR)
+    ax.loglog(x[ran], y[ran], style, color=colour, label=name, marker="none")
+    ax.loglog(x[good], y[good], "o", color=colour, ls="", markersize=5)
+    ax.loglog(x[ran & ~good], y[ran & ~good], "o", color=colour, mfc="white", ls="",
+              markersize=6)
+    _failed_at_bottom(ax, x[failed], None)
+    if not ran.any():
+        ax.text(0.5, 0.6, "nothing to draw: no contact penetrates" if not zero else
+                "nothing to draw", transform=ax.transAxes, ha="center", color="0.3")
+
+
+def _study_legend_extras() -> list:
+    return [Line2D([], [], color="0.3", marker="o", ls="", label="verified"),
+            Line2D([], [], color="0.3", marker="o", mfc="white", ls="",
+                   label="flagged by the check"),
+            Line2D([], [], label="solve failed", **FAILED)]
+
+
 def plot_penalty_sweep(sweep: PenaltySweep) -> Figure:
-    """Two panels over ε: the penalty's penetration; the contact-force error against Lagrange
-    of the penalty and of the augmented Lagrangian method (with its number of updates)."""
-    figure = Figure(figsize=(11, 4.2), layout="constrained")
-    left, right = figure.subplots(1, 2)
-    eps = sweep.penalties
-    ok = np.isfinite(sweep.penetration) & (sweep.penetration > 0)
-    left.loglog(eps[ok], sweep.penetration[ok], "o-", color="tab:blue")
-    unit = sweep.reference.scene.unit
-    left.set_xlabel(f"penalty ε ({unit.stiffness})")
-    left.set_ylabel(f"largest penetration ({unit.length})")
-    left.set_title("penalty: penetration ≈ λ/ε")
-    floor = 1e-17  # errors of exactly 0 are drawn here, on a log axis
-    for errors, style, name in ((sweep.force_error, "s--", "penalty"),
-                                (sweep.augmented_error, "o-", "augmented Lagrangian")):
-        good = np.isfinite(errors)
-        right.loglog(eps[good], np.maximum(errors[good], floor), style, label=name)
-    for x, y, n in zip(eps, sweep.augmented_error, sweep.augmented_iterations):
-        if np.isfinite(y):
-            right.annotate(str(n), (x, max(y, floor)), textcoords="offset points", xytext=(0, 6),
-                           fontsize=7, ha="center", color="tab:orange")
-    right.axvline(eps[sweep.best], color="0.5", linestyle=":")
-    right.annotate("round-off takes over → ", (eps[sweep.best], 1.0), fontsize=8, va="top",
-                   ha="right", color="0.3")
-    right.set_xlabel(f"penalty ε ({unit.stiffness})")
-    right.set_ylabel("relative contact-force error vs Lagrange")
-    right.set_title("force error (numbers: augmented updates)")
-    right.legend(fontsize=8)
-    figure.suptitle(f"penalty sweep: {sweep.reference.scene.name}")
+    """Over ε: the penalty's largest penetration (left); the relative contact-force error
+    against Lagrange multipliers of the penalty and of the augmented Lagrangian method at the
+    same ε (right), and below it the augmented method's number of multiplier updates, runs
+    stopped at the update cap in red. Dotted: the textbook ε (1e14 N/m, in the scene's units)
+    and the ε beyond which round-off takes over."""
+    figure = Figure(figsize=(12, 6), layout="constrained")
+    grid = figure.add_gridspec(2, 2, height_ratios=(3, 1.3))
+    left = figure.add_subplot(grid[:, 0])
+    right = figure.add_subplot(grid[0, 1])
+    updates = figure.add_subplot(grid[1, 1], sharex=right)
+    eps, unit = sweep.penalties, sweep.reference.scene.unit
+    for ax in (left, right):  # set first: a panel may have nothing to draw but the ε marks
+        ax.set(xscale="log", yscale="log", xlim=(eps.min() / 3, eps.max() * 3))
+    _run_marks(left, eps, sweep.penetration, sweep.runs, "tab:blue", "--", "penalty",
+               zero=False)
+    _run_marks(right, eps, sweep.force_error, sweep.runs, "tab:blue", "--", "penalty")
+    _run_marks(right, eps, sweep.augmented_error, sweep.augmented_runs, "tab:orange", "-",
+               "augmented Lagrangian")
+    _draw_updates(updates, eps, sweep)
+    textbook = TEXTBOOK_PENALTY * unit.metre
+    for ax in (left, right, updates):
+        ax.axvline(textbook, color="tab:green", linestyle=":", linewidth=1.5,
+                   label=f"textbook ε = {textbook:.0e} {unit.stiffness}" if ax is left else None)
+    _mark_round_off(right, sweep)
+    left.set(xlabel=f"penalty ε ({unit.stiffness})",
+             ylabel=f"largest penetration ({unit.length})",
+             title="penalty method: penetration ≈ contact force / ε")
+    right.set(ylabel="relative contact-force error",
+              title="contact-force error against Lagrange multipliers")
+    right.tick_params(labelbottom=False)
+    handles = [*right.get_legend_handles_labels()[0], *left.get_legend_handles_labels()[0][1:]]
+    left.legend(handles=[*handles, *_study_legend_extras()], fontsize=8, loc="lower left")
+    figure.suptitle(f"{sweep.reference.scene.name}: the penalty method and the augmented "
+                    f"Lagrangian over ε, {sweep.reference.contact} contact")
     return figure
+
+
+def _draw_updates(ax: Axes, eps: np.ndarray, sweep: PenaltySweep) -> None:
+    """The augmented method's multiplier updates per ε; runs stopped at their cap in red."""
+    runs = sweep.augmented_runs
+    ran = np.array([r.result is not None for r in runs])
+    capped = np.array([r.result is not None and not r.result.claimed_success for r in runs])
+    n = sweep.augmented_iterations.astype(float)
+    ax.semilogx(eps[ran], n[ran], "o-", color="tab:orange", markersize=4)
+    ax.plot(eps[capped], n[capped], "s", color="tab:red", mfc="none", markersize=9,
+            mew=1.5, ls="", label="stopped at its cap: not converged")
+    _failed_at_bottom(ax, eps[~ran], None)
+    caps = {r.result.options.get("max_iterations", DEFAULT_MAX_ITERATIONS)
+            for r in runs if r.result is not None}
+    for cap in caps:
+        ax.axhline(cap, color="tab:red", linewidth=0.8, linestyle="--")
+    ax.set(xlabel=f"penalty ε ({sweep.reference.scene.unit.stiffness})",
+           ylabel="augmented: updates", ylim=(0, 1.15 * max(caps | {1})))
+    if capped.any():
+        ax.legend(fontsize=8, loc="upper right")
+
+
+def _mark_round_off(ax: Axes, sweep: PenaltySweep) -> None:
+    """The ε of the penalty's smallest error, or why there is none."""
+    if not np.any(sweep.reference.contact_force):
+        ax.text(0.5, 0.6, "no contact carries a force: every ε gives the free answer",
+                transform=ax.transAxes, ha="center", fontsize=9, color="0.3")
+        return
+    if np.any(np.isfinite(sweep.force_error)):
+        best = sweep.penalties[sweep.best]
+        ax.axvline(best, color="0.5", linestyle=":",
+                   label=f"penalty's best ε = {best:.0e}: round-off takes over beyond")
 
 
 def plot_nitsche_sweep(sweep: NitscheSweep) -> Figure:
     """Two panels over γ₀, one line per θ: Nitsche's penetration, and its contact-force error
-    against Lagrange multipliers (filled markers: verified; open: flagged)."""
-    figure = Figure(figsize=(11, 4.2), layout="constrained")
+    against Lagrange multipliers (filled markers: verified; open: flagged; red × at the
+    bottom: the solve was refused, e.g. the symmetric form below its threshold)."""
+    figure = Figure(figsize=(11, 4.6), layout="constrained")
     left, right = figure.subplots(1, 2)
     unit = sweep.reference.scene.unit
-    floor = 1e-17  # zero errors are drawn here, on a log axis
     for i, theta in enumerate(sweep.thetas):
         name, colour = f"θ = {theta:g}", f"C{i}"
         for ax, values in ((left, sweep.penetration[i]), (right, sweep.force_error[i])):
             ran = np.isfinite(values)
-            y = np.maximum(values, floor)
+            y = np.maximum(values, FLOOR)
             ax.loglog(sweep.gamma0[ran], y[ran], "-", color=colour, label=name)
-            for ok, face in ((sweep.verified[i] & ran, colour), (~sweep.verified[i] & ran, "none")):
+            for ok, face in ((sweep.verified[i] & ran, colour), (~sweep.verified[i] & ran,
+                                                                 "white")):
                 ax.loglog(sweep.gamma0[ok], y[ok], "o", color=colour, mfc=face, ls="")
+            _failed_at_bottom(ax, sweep.gamma0[~ran], None)
     left.set(xlabel="γ₀ (γ = γ₀·EA/h)", ylabel=f"largest penetration ({unit.length})",
-             title="Nitsche: penetration ≈ the end node's load / γ")
-    right.set(xlabel="γ₀ (γ = γ₀·EA/h)", ylabel="relative contact-force error vs Lagrange",
-              title="force error (filled: verified, open: flagged)")
-    left.legend(fontsize=8)
-    figure.suptitle(f"Nitsche sweep: {sweep.reference.scene.name}")
+             title="penetration ≈ the end node's load / γ")
+    right.set(xlabel="γ₀ (γ = γ₀·EA/h)", ylabel="relative contact-force error",
+              title="contact-force error against Lagrange multipliers")
+    left.legend(handles=[*left.get_legend_handles_labels()[0], *_study_legend_extras()],
+                fontsize=8)
+    figure.suptitle(f"Nitsche's method over γ₀: {sweep.reference.scene.name}")
     return figure
 
 
 def plot_mesh_convergence(study: MeshConvergence, ax: Axes | None = None) -> Axes:
-    """Contact-force error against the continuum over the number of elements, both area rules,
-    with an O(h²) guide through the midpoint rule's first point."""
-    ax = _axes(ax, (6, 4.2))
-    floor = 1e-17  # exact zeros drawn here on the log axis
+    """Lagrange multipliers' contact-force error against the continuum over the number of
+    elements of the default scene's tapered bar, both area rules, with an O(h²) guide through
+    the midpoint rule's first point; errors of exactly 0 drawn at 1e-17 as open markers."""
+    ax = _axes(ax, (6.5, 4.6))
     n = study.elements
-    for rule, style in (("midpoint", "o-"), ("exact", "s-")):
-        ax.loglog(n, np.maximum(study.errors[rule], floor), style, label=f"area rule {rule!r}")
+    for rule, marker in (("midpoint", "o"), ("exact", "s")):
+        errors = study.errors[rule]
+        line, = ax.loglog(n, np.maximum(errors, FLOOR), f"{marker}-",
+                          label=f"area rule {rule!r}")
+        zero = errors == 0.0
+        ax.loglog(n[zero], np.full(zero.sum(), FLOOR), marker, mfc="white",
+                  color=line.get_color(), ls="", label="exactly 0" if zero.any() else None)
     first = study.errors["midpoint"][0]
     ax.loglog(n, first * (n[0] / n) ** 2, "k:", label="O(h²)")
     ax.set_xlabel("elements")
-    ax.set_ylabel("relative contact-force error vs the continuum")
-    ax.set_title("tapered bar: midpoint areas O(h²), exact areas exact")
+    ax.set_ylabel("relative contact-force error")
+    ax.set_title(f"default scene (tapered bar, continuum λ = "
+                 f"{engineering(study.exact_force, 'N')}):\nLagrange multipliers against the "
+                 "continuum; midpoint areas O(h²), exact areas exact", fontsize=10)
     ax.legend(fontsize=8)
     return ax
 
 
-def plot_load_path(path: LoadPath, kink: float | None = None, ax: Axes | None = None) -> Axes:
-    """Displacement of the load point against the load factor, one line per method, with the
-    closed-form load factor ``kink`` at which the first contact closes (dotted)."""
-    ax = _axes(ax, (7, 4.6))
-    styles = {"lagrange": "k-", "equality": "r--", "penalty": "g-.", "augmented": "c:",
-              "qp": "bx", "soft penalty": "m-"}
-    for name, method in path.methods.items():
-        ax.plot(path.load_factor, method.load_point_displacement,
-                styles.get(name, "o-"), label=name, markersize=5, linewidth=1.5)
+# --- the load path ---------------------------------------------------------------------------
+
+LINE_STYLES = {"lagrange": ("k", "-", "o"), "equality": ("tab:red", "--", "v"),
+               "penalty": ("tab:green", "-.", "s"), "augmented": ("tab:cyan", ":", "D"),
+               "qp": ("tab:blue", (0, (1, 3)), "x"), "soft penalty": ("tab:purple", "-", "^")}
+
+
+def plot_load_path(path: LoadPath, kink: float | None = None) -> Figure:
+    """Over the load factor: the displacement of the load point (top) and the sum of the
+    contact forces (bottom), one line per method; markers staggered so that methods whose
+    curves coincide all show. A red × marks a step that failed its check, a red ring one
+    where a contact pulls (equality contact before the wall is reached); dotted: the
+    closed-form load factor ``kink`` at which the first contact closes. Methods that could
+    not solve the scene (:attr:`LoadPath.failed`) are named under the chart."""
+    figure = Figure(figsize=(8, 7), layout="constrained")
+    top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(3, 2))
+    t, unit = path.load_factor, path.scene.unit
+    n = len(path.methods)
+    for i, (name, method) in enumerate(path.methods.items()):
+        colour, dash, marker = LINE_STYLES.get(name, (f"C{i}", "-", "o"))
+        total = method.contact_force.sum(axis=1)
+        for ax, y in ((top, method.load_point_displacement), (bottom, total)):
+            ax.plot(t, y, color=colour, linestyle=dash, marker=marker, markevery=(i, n),
+                    markersize=6, mfc="none", linewidth=1.5, gid=f"curve {name}",
+                    label=f"{name}: {_describe(name, method)}")
+            _mark_steps(ax, t, y, method.verified, method.physical)
     if kink is not None and np.isfinite(kink):
-        ax.axvline(kink, color="0.5", linestyle=":", label=f"first contact, closed form t = {kink:.4g}")
-    ax.set_xlabel("load factor (× the scene's loads)")
-    ax.set_ylabel(f"displacement of node {path.load_node} ({path.scene.unit.length})")
-    ax.set_title(f"load path: {path.scene.name}")
-    ax.legend(fontsize=8)
-    return ax
+        for ax in (top, bottom):
+            ax.axvline(kink, color="0.5", linestyle=":",
+                       label=f"first contact closes (closed form): t = {kink:.4g}"
+                       if ax is top else None)
+    layout = path.scene.layout
+    bar = int(layout.node_bar[path.load_node])
+    where = (f"node {path.load_node}" if len(path.scene.bars) == 1 else
+             f"bar {bar} node {path.load_node - int(layout.node_offsets[bar])}")
+    top.set_ylabel(f"displacement of {where} ({unit.length})")
+    bottom.set_ylabel(f"sum of contact forces ({unit.force})")
+    bottom.set_xlabel("load factor t (× every load of the scene)")
+    top.legend(handles=[*top.get_legend_handles_labels()[0], *_step_legend()], fontsize=8,
+               loc="upper left")
+    if path.failed:
+        top.set_title(textwrap.fill("no curve: " + "; ".join(
+            f"{name}: {why}" for name, why in path.failed.items()), 110), fontsize=8,
+            color="tab:red", loc="left")
+    figure.suptitle(f"load path: {path.scene.name}")
+    return figure
+
+
+CURVE_NAMES = {"lagrange": "Lagrange multipliers", "equality": "Lagrange, equality contact",
+               "penalty": "penalty, default ε", "augmented": "augmented Lagrangian"}
+
+
+def _describe(name: str, method) -> str:
+    """What a load path's method is, in words (its first step's method, solver and ε)."""
+    first = method.results[0]
+    if name in CURVE_NAMES:
+        return CURVE_NAMES[name]
+    if first.method == "penalty" and "penalty" in first.options:
+        unit = first.scene.unit.stiffness
+        return f"penalty, ε = {engineering(first.options['penalty'], unit)}"
+    return first.label
+
+
+def _mark_steps(ax: Axes, t: np.ndarray, y: np.ndarray, verified: np.ndarray,
+                physical: np.ndarray) -> None:
+    """A red × on the steps that failed their check, a red ring where a contact pulls."""
+    ax.plot(t[~verified], y[~verified], gid="failed steps", **FAILED)
+    pulls = verified & ~physical
+    ax.plot(t[pulls], y[pulls], "o", color="tab:red", mfc="none", markersize=10, ls="",
+            gid="pulling steps")
+
+
+def _step_legend() -> list:
+    return [Line2D([], [], label="step failed its check", **FAILED),
+            Line2D([], [], color="tab:red", marker="o", mfc="none", markersize=10, ls="",
+                   label="a contact pulls")]
 
 
 def save(chart: Axes | Figure, path) -> str:
