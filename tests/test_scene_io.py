@@ -5,6 +5,8 @@ that name the field and the value.
 from __future__ import annotations
 
 import math
+import re
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +29,10 @@ from contactqp import (
     Wall,
 )
 from contactqp.cli import main
+from contactqp.scene import BarContact, Circle, DistributedLoad, HollowCircle, Rectangle
 from contactqp.scene_io import load_scene
+
+DOCS = Path(__file__).parent.parent / "docs" / "scene_files.md"
 
 # The scene-file example of the README, comments and all
 EXAMPLE_TOML = """\
@@ -60,14 +65,26 @@ side = "+"                    # "+": u4 <= gap; "-": u4 >= -gap
 
 def assert_same_scene(a: Scene, b: Scene) -> None:
     """Two scenes hold the same data, bit for bit (repr of a float round-trips exactly)."""
-    assert a.bars[0].lengths.tolist() == b.bars[0].lengths.tolist()
-    assert a.bars[0].areas.tolist() == b.bars[0].areas.tolist()
-    assert a.bars[0].youngs_modulus.tolist() == b.bars[0].youngs_modulus.tolist()
-    assert a.bars[0].yield_stress == b.bars[0].yield_stress
+    assert len(a.bars) == len(b.bars)
+    for bar_a, bar_b in zip(a.bars, b.bars):
+        assert bar_a.lengths.tolist() == bar_b.lengths.tolist()
+        assert bar_a.areas.tolist() == bar_b.areas.tolist()
+        assert bar_a.youngs_modulus.tolist() == bar_b.youngs_modulus.tolist()
+        assert bar_a.yield_stress == bar_b.yield_stress
     assert a.supports == b.supports
     assert a.loads == b.loads
     assert a.walls == b.walls
-    assert a.name == b.name
+    assert a.distributed == b.distributed
+    assert a.contacts == b.contacts
+    assert (a.name, a.units) == (b.name, b.units)
+
+
+def round_trip(scene: Scene, tmp_path: Path) -> tuple[Scene, str]:
+    """The scene written with scene_to_toml and read back with load_scene, and the text."""
+    text = contactqp.scene_to_toml(scene)
+    path = tmp_path / "scene.toml"
+    path.write_text(text, encoding="utf-8")
+    return contactqp.load_scene(path), text
 
 
 def two_sided_scene() -> Scene:
@@ -87,6 +104,40 @@ def section_data() -> dict:
     data = valid_data()
     data["bar"] = {"length": 1.0, "elements": 2,
                    "section": {"shape": "circle", "diameter_start": 0.02, "diameter_end": 0.01}}
+    return data
+
+
+def uniform_data() -> dict:
+    """The same bar as one area over equal elements."""
+    data = valid_data()
+    data["bar"] = {"length": 1.0, "elements": 2, "area": 1e-4}
+    return data
+
+
+def rectangle_data() -> dict:
+    """A rectangle tapered in width, of constant height."""
+    data = valid_data()
+    data["bar"] = {"length": 1.0, "elements": 2,
+                   "section": {"shape": "rectangle", "width_start": 0.04, "width_end": 0.02,
+                               "height": 0.01}}
+    return data
+
+
+def tube_data() -> dict:
+    """A tube of constant outer and inner diameter."""
+    data = valid_data()
+    data["bar"] = {"length": 1.0, "elements": 2,
+                   "section": {"shape": "hollow_circle", "outer_diameter": 0.04,
+                               "inner_diameter": 0.03}}
+    return data
+
+
+def two_bars_data() -> dict:
+    """Two [[bar]] tables, the second with its own material: a tube and a uniform bar."""
+    data = valid_data()
+    tube, uniform = tube_data()["bar"], uniform_data()["bar"]
+    data["bar"] = [uniform, {**tube, "material": {"youngs_modulus": 7e10, "yield_stress": 1e8}}]
+    data["support"].append({"bar": 1, "node": 0})
     return data
 
 
@@ -128,11 +179,49 @@ BAD_DATA = [
     (valid_data, ("wall", 0, "gap"), math.nan, "wall[0].gap", "nan"),
     (valid_data, ("wall", 0, "side"), "left", "wall[0].side", "'left'"),
     (valid_data, ("support",), [], "support", None),  # no support: no value to show
+    # sections: each dimension one number or its two ends, checked as the file spells it
+    (tube_data, ("bar", "section", "inner_diameter"), 0.05, "bar.section.inner_diameter",
+     "= 0.05 is not less than outer_diameter = 0.04"),
+    (tube_data, ("bar", "section", "inner_diameter"), -0.01, "bar.section.inner_diameter",
+     "-0.01"),
+    (tube_data, ("bar", "section", "outer_diameter"), "40 mm", "bar.section.outer_diameter",
+     "'40 mm'"),
+    (tube_data, ("bar", "section", "outer_diameter"), [0.04, 0.05],
+     "bar.section.outer_diameter must be one number", "outer_diameter_start"),
+    (rectangle_data, ("bar", "section", "width_end"), 0.0, "bar.section.width_end", "0.0"),
+    (rectangle_data, ("bar", "section", "height"), math.inf, "bar.section.height", "inf"),
+    (rectangle_data, ("bar", "section", "width"), 0.03, "bar.section.width",
+     "and bar.section.width_start are both given"),
+    (rectangle_data, ("bar", "section", "shape"), 3, "bar.section.shape", "got 3"),
+    (rectangle_data, ("bar", "section", "area_rule"), "exactly", "bar.section.area_rule",
+     "'exactly'"),
+    (rectangle_data, ("bar", "elements"), 1.5, "bar.elements", "1.5"),
+    (rectangle_data, ("bar", "lengths"), [0.5, 0.5], "bar.lengths goes with", "bar.area"),
+    # one area for every element
+    (uniform_data, ("bar", "area"), 0.0, "bar.area", "0.0"),
+    (uniform_data, ("bar", "area"), math.nan, "bar.area", "nan"),
+    (uniform_data, ("bar", "area"), [1e-4, 1e-4], "bar.area must be one number",
+     "[0.0001, 0.0001]"),
+    (uniform_data, ("bar", "areas"), [1e-4, 1e-4], "bar: give one of", "got areas and area"),
+    (uniform_data, ("bar", "elements"), -2, "bar.elements", "-2"),
+    (uniform_data, ("bar", "lengths"), [0.5, 0.5], "bar: give length and elements, or lengths",
+     "not both"),
+    (valid_data, ("bar", "elements"), 2, "bar.elements goes with", "bar.areas"),
+    # several bars: the message names the bar
+    (two_bars_data, ("bar", 1, "section", "inner_diameter"), 0.05,
+     "bar[1].section.inner_diameter = 0.05 is not less than outer_diameter = 0.04", None),
+    (two_bars_data, ("bar", 0, "area"), -1e-4, "bar[0].area", "-0.0001"),
+    (two_bars_data, ("bar", 0, "length"), 0.0, "bar[0].length", "0.0"),
+    (two_bars_data, ("bar", 1, "material", "yield_stress"), 0.0,
+     "bar[1].material.yield_stress", "0.0"),
+    (two_bars_data, ("bar", 1, "section", "shape"), "tube", "bar[1].section.shape", "'tube'"),
     # unknown keys: the message names the key (the "value" is the key itself)
     (valid_data, ("walls",), [], "scene.walls", "unknown key"),
     (valid_data, ("material", "youngs_moduls"), 2e11, "material.youngs_moduls", "unknown key"),
-    (valid_data, ("bar", "area"), [1e-4], "bar.area", "unknown key"),
-    (section_data, ("bar", "section", "diameter"), 0.02, "bar.section.diameter", "unknown key"),
+    (valid_data, ("bar", "areas_mm2"), [1e-4], "bar.areas_mm2", "unknown key"),
+    (section_data, ("bar", "section", "radius"), 0.01, "bar.section.radius", "unknown key"),
+    (rectangle_data, ("bar", "section", "diameter"), 0.02, "bar.section.diameter",
+     "unknown key"),
     (valid_data, ("support", 0, "nodes"), 1, "support[0].nodes", "unknown key"),
     (valid_data, ("load", 0, "forse"), 1.0, "load[0].forse", "unknown key"),
     (valid_data, ("wall", 0, "gapp"), 0.0, "wall[0].gapp", "unknown key"),
@@ -166,8 +255,136 @@ def test_every_example_runs_and_round_trips(path, tmp_path):
 
 def test_examples_cover_every_feature():
     text = " ".join(p.read_text() for p in EXAMPLES)
-    for table in ("[[bar]]", "[[contact]]", "[[distributed_load]]", "[[obstacle]]", "[bar.material]"):
+    for table in ("[[bar]]", "[[contact]]", "[[distributed_load]]", "[[obstacle]]", "[bar.material]",
+                  'shape = "rectangle"', "area = ", "width_start"):
         assert table in text
+
+
+def test_strap_and_rod_example_is_its_closed_form():
+    """examples/strap_and_rod.toml: a strap 0.5 m long, 10 mm thick, 40 → 20 mm wide (E =
+    210 GPa), against a rod of 250 mm² and 0.4 m (E = 70 GPa), 0.2 mm apart, 150 kN on the
+    strap's tip: λ = (F − k0 g)·k1/(k0 + k1), k0 the continuous taper's stiffness."""
+    k0 = 210e9 * 0.010 * (0.020 - 0.040) / (0.5 * math.log(0.020 / 0.040))
+    k1 = 70e9 * 2.5e-4 / 0.4
+    force = (150e3 - k0 * 2e-4) * k1 / (k0 + k1)
+    path = next(p for p in EXAMPLES if p.stem == "strap_and_rod")  # run by the example tests too
+    result = contactqp.solve(load_scene(path))
+    assert result.verified
+    # the exact rule makes the four elements the continuous strap: round-off only
+    assert result.contact_force[0] == pytest.approx(force, rel=1e-12)
+    assert force == pytest.approx(33359.04, abs=0.005)  # the number the file's comment gives
+
+
+@pytest.mark.parametrize("section, data", [
+    (Circle(0.03), {"shape": "circle", "diameter": 0.03}),
+    (Circle((0.04, 0.02)), {"shape": "circle", "diameter_start": 0.04, "diameter_end": 0.02}),
+    (HollowCircle(0.05, 0.04), {"shape": "hollow_circle", "outer_diameter": 0.05,
+                                "inner_diameter": 0.04}),
+    (HollowCircle((0.05, 0.03), (0.02, 0.0)),
+     {"shape": "hollow_circle", "outer_diameter_start": 0.05, "outer_diameter_end": 0.03,
+      "inner_diameter_start": 0.02, "inner_diameter_end": 0.0}),
+    (Rectangle(0.04, 0.01), {"shape": "rectangle", "width": 0.04, "height": 0.01}),
+    (Rectangle((0.04, 0.02), (0.01, 0.03)),
+     {"shape": "rectangle", "width_start": 0.04, "width_end": 0.02, "height_start": 0.01,
+      "height_end": 0.03}),
+    (Rectangle(0.04, (0.01, 0.03)),
+     {"shape": "rectangle", "width": 0.04, "height_start": 0.01, "height_end": 0.03}),
+], ids=lambda value: value["shape"] if isinstance(value, dict) else "")
+@pytest.mark.parametrize("rule", ["midpoint", "exact"])
+def test_a_section_in_a_file_is_the_section_in_python(section, data, rule):
+    scene = contactqp.scene_from_dict(with_value(section_data(), ("bar", "section"),
+                                                 {**data, "area_rule": rule}))
+    bar = Bar.from_section(section, 2e11, length=1.0, elements=2, area_rule=rule)
+    assert scene.bars[0].areas.tolist() == bar.areas.tolist()  # one code path: bit for bit
+
+
+def test_a_rectangle_in_a_file_has_its_closed_form_areas():
+    scene = contactqp.scene_from_dict(rectangle_data())
+    # midpoint (the default): widths 35 and 25 mm at the elements' middles, times 10 mm
+    np.testing.assert_allclose(scene.bars[0].areas, [0.035 * 0.01, 0.025 * 0.01], rtol=1e-14)
+
+
+def test_a_tube_in_a_file_has_its_closed_form_area():
+    scene = contactqp.scene_from_dict(tube_data())
+    area = math.pi * (0.04**2 - 0.03**2) / 4.0  # 549.8 mm²
+    np.testing.assert_allclose(scene.bars[0].areas, [area, area], rtol=1e-14)
+
+
+@pytest.mark.parametrize("geometry, lengths", [
+    ({"length": 0.9, "elements": 3}, [0.3, 0.3, 0.3]),
+    ({"lengths": [0.2, 0.3, 0.4]}, [0.2, 0.3, 0.4]),
+])
+def test_one_area_for_every_element(geometry, lengths):
+    data = valid_data()
+    data["bar"] = {"area": 2e-4, **geometry}
+    data["load"][0]["node"] = 3
+    data["wall"][0]["node"] = 3
+    bar = contactqp.scene_from_dict(data).bars[0]
+    assert bar.areas.tolist() == [2e-4] * 3
+    np.testing.assert_allclose(bar.lengths, lengths, rtol=1e-15)  # 0.9 / 3: one rounding
+
+
+def test_several_bars_with_their_own_materials():
+    scene = contactqp.scene_from_dict(two_bars_data())
+    steel, aluminium = scene.bars
+    assert steel.youngs_modulus.tolist() == [2e11, 2e11]  # the file's [material]
+    assert steel.yield_stress == 2.5e8
+    assert aluminium.youngs_modulus.tolist() == [7e10, 7e10]  # its own bar.material
+    assert aluminium.yield_stress == 1e8
+
+
+@pytest.mark.parametrize("bar, written", [
+    (Bar.uniform(2.5e-4, 7e10, length=0.9, elements=3), ["area = 0.00025", "elements = 3"]),
+    # 0.1 × 3 / 3 is not 0.1 in binary: the lengths are written one by one
+    (Bar.uniform(2.5e-4, 7e10, lengths=[0.1] * 3), ["area = 0.00025", "lengths = [0.1, "]),
+    (Bar.from_section(Rectangle((0.04, 0.02), 0.01), 2e11, length=1.0, elements=5,
+                      area_rule="exact"), ["areas = [", "length = 1.0"]),
+    (Bar.from_section(HollowCircle(0.05, (0.04, 0.03)), 2e11, length=0.7, elements=3,
+                      yield_stress=3e8), ["areas = [", "yield_stress = 300000000.0"]),
+], ids=["uniform", "uniform-own-lengths", "rectangle", "tube"])
+def test_round_trip_of_each_kind_of_bar(tmp_path: Path, bar, written):
+    scene = Scene(bar, (Support(0),), (Load(bar.n_elements, 1e3),),
+                  (Wall(bar.n_elements, 1e-4),), name="kind")
+    again, text = round_trip(scene, tmp_path)
+    assert_same_scene(again, scene)
+    for line in written:
+        assert line in text
+
+
+def test_round_trip_of_several_bars_with_their_materials(tmp_path: Path):
+    bars = (Bar.from_section(Rectangle((0.04, 0.02), 0.01), 2.1e11, length=0.5, elements=4,
+                             area_rule="exact", yield_stress=3.55e8),
+            Bar.uniform(2.5e-4, 7e10, length=0.4, elements=2))
+    scene = Scene(bars, (Support(0, 0), Support(2, 1)), (Load(4, 1.5e5, 0),),
+                  distributed=(DistributedLoad(-2e3, 1, 0, 1),),
+                  contacts=(BarContact(0, 4, 1, 0, 2e-4),), name="strap and rod", units="SI")
+    again, text = round_trip(scene, tmp_path)
+    assert_same_scene(again, scene)
+    assert text.count("[bar.material]") == 2
+
+
+def code_blocks(language: str) -> list[str]:
+    """Every ```language block of docs/scene_files.md."""
+    return re.findall(rf"```{language}\n(.*?)```", DOCS.read_text(encoding="utf-8"), re.DOTALL)
+
+
+def test_every_scene_in_the_scene_file_reference_runs(tmp_path: Path):
+    """A block with a support is a whole scene: it loads and solves to a verified answer.
+    Other blocks are pieces: each `section = {...}` line makes a bar."""
+    scenes = sections = 0
+    for i, block in enumerate(code_blocks("toml")):
+        if "[[support]]" in block:
+            path = tmp_path / f"block{i}.toml"
+            path.write_text(block, encoding="utf-8")
+            result = contactqp.solve(load_scene(path))
+            assert result.verified, (block, result.message)
+            scenes += 1
+        for line in re.findall(r"^section = .*$", block, re.MULTILINE):
+            data = with_value(section_data(), ("bar", "section"),
+                              tomllib.loads(line)["section"])
+            assert contactqp.scene_from_dict(data).bars[0].n_elements == 2
+            sections += 1
+    assert scenes >= 2 and sections >= 6  # guard: the page's examples are really read
 
 
 @pytest.mark.parametrize("make_scene", [contactqp.default_scene, two_sided_scene])
@@ -296,3 +513,14 @@ def test_missing_file(tmp_path: Path):
     path = tmp_path / "nowhere.toml"
     with pytest.raises(SceneError, match=r"nowhere\.toml.*does not exist"):
         contactqp.load_scene(path)
+
+
+def test_the_python_of_the_scene_file_reference_runs():
+    (block,) = code_blocks("python")
+    namespace: dict = {}
+    exec(block, namespace)  # noqa: S102 - the page's own example
+    assert namespace["result"].verified
+    # the tube of the page's first scene: λ = F − (EA/L)·gap, A = π(0.040² − 0.030²)/4
+    area = math.pi * (0.040**2 - 0.030**2) / 4.0
+    assert namespace["result"].contact_force[0] == pytest.approx(
+        100e3 - 210e9 * area / 1.0 * 5e-4, rel=1e-12)  # springs in series: round-off only

@@ -1,11 +1,12 @@
 """Scene files: TOML in (:func:`load_scene`, :func:`scene_from_dict`) and out
-(:func:`scene_to_toml`); the format is in the README. Unknown keys are errors, and every error
+(:func:`scene_to_toml`); the format is in docs/scene_files.md. Unknown keys are errors, and every error
 names the field as the file spells it."""
 
 from __future__ import annotations
 
 import json
 import tomllib
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -13,15 +14,26 @@ import numpy as np
 
 from contactqp.builders import wall_at_every_node
 from contactqp.errors import SceneError
-from contactqp.scene import Bar, BarContact, DistributedLoad, Load, Scene, Support, Wall
+from contactqp.scene import (
+    SECTIONS,
+    Bar,
+    BarContact,
+    DistributedLoad,
+    Load,
+    Scene,
+    Section,
+    Support,
+    Wall,
+)
 from contactqp.values import number
 
 _TOP_KEYS = {"name", "units", "material", "bar", "support", "load", "wall", "distributed_load",
              "contact",
              "obstacle"}
 _MATERIAL_KEYS = {"youngs_modulus", "yield_stress"}
-_BAR_KEYS = {"length", "lengths", "elements", "section", "areas", "material"}
-_SECTION_KEYS = {"shape", "diameter_start", "diameter_end", "area_rule"}
+_BAR_KEYS = {"length", "lengths", "elements", "section", "areas", "area", "material"}
+_AREA_KEYS = ("areas", "area", "section")  # exactly one says what each element's area is
+_ENDS = ("_start", "_end")
 
 
 def _table(data: Any, name: str, allowed: set[str], required: set[str] = frozenset()) -> dict:
@@ -55,36 +67,82 @@ def _bar_from_dict(bar_data: Any, name: str, material: dict | None) -> Bar:
     if material is None:
         raise SceneError(f"{name}: no material; give [material] or {name}.material")
     modulus = number(f"{where}.youngs_modulus", material["youngs_modulus"], minimum=0.0,
-                      strict=True)
+                     strict=True)
     yield_stress = material.get("yield_stress")
+    if yield_stress is not None:
+        yield_stress = number(f"{where}.yield_stress", yield_stress, minimum=0.0, strict=True)
+    given = [key for key in _AREA_KEYS if key in bar_data]
+    if len(given) != 1:
+        raise SceneError(f"{name}: give one of areas = [...] (m², one per element), area = A "
+                         "(m², every element) or section = {...}, got "
+                         f"{' and '.join(given) if given else 'none'}")
+    common = {"yield_stress": yield_stress, "name": name}
     if "areas" in bar_data:
-        if "section" in bar_data or "elements" in bar_data:
-            raise SceneError(f"{name}: give either areas or elements + section, not both")
+        if "elements" in bar_data:
+            raise SceneError(f"{name}.elements goes with {name}.area or {name}.section; with "
+                             f"{name}.areas there is one element per area")
         if not isinstance(bar_data["areas"], list):
             raise SceneError(f"{name}.areas must be a list of numbers, got {bar_data['areas']!r}")
-        return Bar.from_areas(
-            bar_data["areas"], modulus, length=bar_data.get("length"),
-            lengths=bar_data.get("lengths"), yield_stress=yield_stress,
-        )
-    for key in ("length", "elements", "section"):
+        return Bar.from_areas(bar_data["areas"], modulus, length=bar_data.get("length"),
+                              lengths=bar_data.get("lengths"), **common)
+    if "area" in bar_data:
+        if isinstance(bar_data["area"], list):
+            raise SceneError(f"{name}.area must be one number (m², every element), got "
+                             f"{bar_data['area']!r}; one per element is {name}.areas = [...]")
+        if "lengths" in bar_data and ("length" in bar_data or "elements" in bar_data):
+            raise SceneError(f"{name}: give length and elements, or lengths, not both")
+        return Bar.uniform(bar_data["area"], modulus, length=bar_data.get("length"),
+                           elements=bar_data.get("elements"), lengths=bar_data.get("lengths"),
+                           **common)
+    for key in ("length", "elements"):
         if key not in bar_data:
-            raise SceneError(f"{name}.{key} is missing (or give {name}.areas)")
+            raise SceneError(f"{name}.{key} is missing (a section needs length and elements)")
     if "lengths" in bar_data:
-        raise SceneError(f"{name}.lengths goes with {name}.areas; with {name}.section the "
-                         f"elements are equal ({name}.length / {name}.elements)")
-    section = _table(bar_data["section"], f"{name}.section", _SECTION_KEYS,
-                     {"shape", "diameter_start", "diameter_end"})
-    if section["shape"] != "circle":
-        raise SceneError(f"{name}.section.shape must be 'circle', got {section['shape']!r}")
-    return Bar.tapered_circle(
-        bar_data["length"], bar_data["elements"], section["diameter_start"],
-        section["diameter_end"], modulus, area_rule=section.get("area_rule", "midpoint"),
-        yield_stress=yield_stress,
-    )
+        raise SceneError(f"{name}.lengths goes with {name}.areas or {name}.area; with "
+                         f"{name}.section the elements are equal ({name}.length / "
+                         f"{name}.elements)")
+    section, rule = _section_from_dict(bar_data["section"], f"{name}.section")
+    return Bar.from_section(section, modulus, length=bar_data["length"],
+                            elements=bar_data["elements"], area_rule=rule, **common)
+
+
+def _section_from_dict(data: Any, name: str) -> tuple[Section, Any]:
+    """A section and its area rule from its TOML table: ``shape``, each dimension as one
+    number (``width``) or its two ends (``width_start``, ``width_end``), ``area_rule``."""
+    shapes = ", ".join(map(repr, SECTIONS))
+    if not isinstance(data, dict):
+        raise SceneError(f"{name} must be a table, got {data!r}")
+    if "shape" not in data:
+        raise SceneError(f"{name}.shape is missing (one of {shapes})")
+    shape = data["shape"]
+    kind = SECTIONS.get(shape) if isinstance(shape, str) else None
+    if kind is None:
+        raise SceneError(f"{name}.shape must be one of {shapes}, got {shape!r}")
+    dimensions = [f.name for f in fields(kind)]
+    _table(data, name, {"shape", "area_rule"} | {d + end for d in dimensions
+                                                  for end in ("", *_ENDS)})
+    values = {}
+    for d in dimensions:
+        ends = [d + end for end in _ENDS if d + end in data]
+        if d in data and ends:
+            raise SceneError(f"{name}.{d} and {name}.{ends[0]} are both given: give {d} (the "
+                             f"same along the bar) or {d}_start and {d}_end (a taper)")
+        if d in data:
+            if isinstance(data[d], list):
+                raise SceneError(f"{name}.{d} must be one number, got {data[d]!r}; a taper "
+                                 f"is {d}_start and {d}_end")
+            values[d] = data[d]
+        elif len(ends) == 2:
+            values[d] = (data[d + _ENDS[0]], data[d + _ENDS[1]])
+        else:
+            missing = d if not ends else d + _ENDS[ends[0] == d + _ENDS[0]]
+            raise SceneError(f"{name}.{missing} is missing ({d} for a {kind.shape} the same "
+                             f"along the bar, {d}_start and {d}_end for a taper)")
+    return kind(**values), data.get("area_rule", "midpoint")
 
 
 def scene_from_dict(data: dict, name: str = "scene") -> Scene:
-    """Build a scene from the parsed TOML structure documented in the README: one ``[bar]``
+    """Build a scene from the parsed TOML structure (docs/scene_files.md): one ``[bar]``
     or several ``[[bar]]`` (each may have its own ``material`` table)."""
     data = _table(data, "scene", _TOP_KEYS, {"bar"})
     material = None
@@ -130,7 +188,7 @@ def scene_from_dict(data: dict, name: str = "scene") -> Scene:
 
 
 def load_scene(path: str | Path) -> Scene:
-    """Read a scene from a TOML file (format in the README)."""
+    """Read a scene from a TOML file (format in docs/scene_files.md)."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -145,9 +203,23 @@ def load_scene(path: str | Path) -> Scene:
     return scene_from_dict(data, name=path.stem)
 
 
+def _bar_geometry(bar: Bar) -> list[str]:
+    """A bar's TOML lines that give back its lengths and areas bit for bit: ``area`` where
+    every element has one area, ``length`` where the elements are equal and length / elements
+    gives their length again, else one value per element."""
+    n, first = bar.n_elements, float(bar.lengths[0])
+    equal = bool(np.all(bar.lengths == first)) and (first * n) / n == first
+    lines = [f"length = {first * n!r}"] if equal else [
+        f"lengths = {[float(v) for v in bar.lengths]!r}"]
+    if np.all(bar.areas == bar.areas[0]):
+        return [*lines, f"area = {float(bar.areas[0])!r}"] + ([f"elements = {n}"] if equal else [])
+    return [*lines, f"areas = {[float(a) for a in bar.areas]!r}"]
+
+
 def scene_to_toml(scene: Scene) -> str:
-    """The scene as TOML text that :func:`load_scene` reads back (explicit areas and lengths;
-    an obstacle as its walls)."""
+    """The scene as TOML text that :func:`load_scene` reads back to the same scene: each
+    bar's areas and lengths (a section as the areas it gave, one ``area`` for a uniform
+    bar), an obstacle as its walls."""
     lines = [f"name = {json.dumps(scene.name)}",  # JSON strings are TOML
              f"units = {json.dumps(scene.units)}"]
     several = len(scene.bars) > 1
@@ -155,8 +227,7 @@ def scene_to_toml(scene: Scene) -> str:
         moduli = np.unique(bar.youngs_modulus)
         if moduli.size != 1:
             raise SceneError(f"scene_to_toml: bar[{i}] has several moduli, which have no TOML form")
-        lines += ["", "[[bar]]" if several else "[bar]", f"areas = {[float(a) for a in bar.areas]!r}",
-                  f"lengths = {[float(v) for v in bar.lengths]!r}",
+        lines += ["", "[[bar]]" if several else "[bar]", *_bar_geometry(bar),
                   "", "[bar.material]", f"youngs_modulus = {float(moduli[0])!r}"]
         if bar.yield_stress is not None:
             lines.append(f"yield_stress = {bar.yield_stress!r}")
