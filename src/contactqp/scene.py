@@ -36,11 +36,10 @@ AREA_RULES = ("midpoint", "exact")
 WALL_SIDES = ("+", "-")
 MAX_ELEMENTS = 10_000_000  # every element costs ~1 kB across model, solve and check
 Ends = tuple[float, float]  # a dimension at x = 0 and at x = L (m)
-
-
-Dimension = float | tuple[float, float]
+Dimension = float | Ends
 """A section's dimension (m): one number along the whole bar, or a pair (at x = 0, at x = L)
 between which it tapers linearly."""
+_PAIRS = (tuple, list, np.ndarray)  # what a tapered dimension may be given as
 
 
 def _dimension(name: str, value: Any, zero_allowed: bool = False) -> tuple[float, float]:
@@ -48,7 +47,7 @@ def _dimension(name: str, value: Any, zero_allowed: bool = False) -> tuple[float
     where ``zero_allowed``); a pair's ends are named ``name_start`` and ``name_end``,
     as a scene file spells them."""
     strict = not zero_allowed
-    if isinstance(value, (tuple, list)):
+    if isinstance(value, _PAIRS):
         if len(value) != 2:
             raise SceneError(f"{name} must be one number or a pair (start, end), got {value!r}")
         return (number(f"{name}_start", value[0], minimum=0.0, strict=strict),
@@ -59,7 +58,7 @@ def _dimension(name: str, value: Any, zero_allowed: bool = False) -> tuple[float
 
 def _key(name: str, value: Any, end: int) -> str:
     """How a scene file spells end ``end`` (0 or 1) of dimension ``name`` given as ``value``."""
-    return f"{name}{('_start', '_end')[end]}" if isinstance(value, (tuple, list)) else name
+    return f"{name}{('_start', '_end')[end]}" if isinstance(value, _PAIRS) else name
 
 
 @dataclass(frozen=True)
