@@ -107,6 +107,13 @@ def section_data() -> dict:
     return data
 
 
+def wall_free_data() -> dict:
+    """valid_data without its wall: with no support, nothing would hold the bar."""
+    data = valid_data()
+    del data["wall"]
+    return data
+
+
 def uniform_data() -> dict:
     """The same bar as one area over equal elements."""
     data = valid_data()
@@ -178,7 +185,7 @@ BAD_DATA = [
     (valid_data, ("wall", 0, "gap"), "1e-4", "wall[0].gap", "'1e-4'"),
     (valid_data, ("wall", 0, "gap"), math.nan, "wall[0].gap", "nan"),
     (valid_data, ("wall", 0, "side"), "left", "wall[0].side", "'left'"),
-    (valid_data, ("support",), [], "support", None),  # no support: no value to show
+    (wall_free_data, ("support",), [], "support", None),  # nothing holds it: no value to show
     # sections: each dimension one number or its two ends, checked as the file spells it
     (tube_data, ("bar", "section", "inner_diameter"), 0.05, "bar.section.inner_diameter",
      "= 0.05 is not less than outer_diameter = 0.04"),
