@@ -83,6 +83,26 @@ def test_every_verified_answer_is_within_its_bound(seed):
             assert_within_bound(result, exact)
 
 
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 2**32 - 1))
+def test_bars_held_only_by_contact_are_within_their_bound(seed):
+    """The same guarantee where some bars have no support and are held by their walls and
+    bar contacts alone (K singular); methods that need K⁻¹ refuse such a scene with a reason."""
+    rng = np.random.default_rng(seed)
+    scene = random_scene(rng, floating=0.6)
+    try:
+        exact = reference(scene)
+    except contactqp.SceneError:  # too many rows for the exact path's last resort
+        return
+    for method, options, formulation in runs(rng):
+        try:
+            result = solve_quietly(scene, method, options, formulation)
+        except contactqp.ContactqpError:
+            continue
+        if result.verified:
+            assert_within_bound(result, exact)
+
+
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.integers(0, 2**32 - 1))
 def test_the_exact_methods_are_verified(seed):

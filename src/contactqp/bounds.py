@@ -15,6 +15,7 @@ import numpy as np
 
 from contactqp.model import (
     Layout,
+    bar_groups,
     count_up_to,
     in_set,
     largest,
@@ -101,6 +102,8 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     displacement_bound += ROUND_OFF * max(largest(u), U)
     if not equality:
         displacement_bound += _release(layout, held, pushing, lam, force_bound)
+    if unpinned_bar(layout, pushing) is not None:  # the answer leaves a bar free to move
+        displacement_bound = np.inf
     feasibility = largest((np.abs(pen) if equality else np.maximum(pen, 0.0)) * s) / F
     residuals: dict[str, float | None] = {"equilibrium": r_max / F, "feasibility": feasibility}
     if equality:
@@ -146,6 +149,8 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
     element, compliance = layout.elements
     if element.size == 0:
         return 0.0, 0.0
+    if held.size == 0:  # bars with no support, and nothing in the answer holds them
+        return np.inf, np.inf
     r = (links + outside[:-1])[element]
     position = _count_at_or_before(layout.n_nodes, held, element)  # held nodes up to the start
     run = position if len(layout.scene.bars) == 1 else (
@@ -234,9 +239,19 @@ def _contact_give(layout: Layout, held: np.ndarray, pushing: np.ndarray) -> floa
     for ends in pairs:
         if np.isin(ends, layout.support_nodes).any():
             continue
-        stiffness = seen_stiffness(layout, others, ends)
-        give = max(give, 1.0 / float(stiffness.sum()))
+        stiffness = float(seen_stiffness(layout, others, ends).sum())
+        give = max(give, 1.0 / stiffness if stiffness > 0.0 else np.inf)  # 0: nothing holds it
     return give
+
+
+def unpinned_bar(layout: Layout, pushing: np.ndarray) -> int | None:
+    """A bar with no support that the ``pushing`` rows do not join to a support or a wall
+    (through other bars), or None: nothing in the answer fixes where such a bar is."""
+    if len({s.bar for s in layout.scene.supports}) == len(layout.scene.bars):
+        return None
+    labels = bar_groups(layout.scene, pushing)
+    loose = np.flatnonzero(labels[:-1] != labels[-1])
+    return int(loose[0]) if loose.size else None
 
 
 def gap_moves(layout: Layout, held: np.ndarray, nodes: np.ndarray, delta: np.ndarray,

@@ -152,7 +152,8 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
         for name, value in residuals.items()
         if value is not None and not value <= getattr(tolerances, name)
     ]
-    residuals["natural_map"] = None if contact == "equality" else float(natural_map(
+    # the LCP needs K⁻¹, which a scene with a bar held only by contact does not have
+    residuals["natural_map"] = None if contact == "equality" or model.floating else float(natural_map(
         lam, -bounds.penetration, free_gaps(model), row_compliance_roots(layout)))
     pulling = float(np.max(-lam, initial=0.0)) / F
     physical = pulling <= tolerances.sign

@@ -297,5 +297,90 @@ def equality_conflict(scene: Scene) -> str:
     return ""
 
 
+MAX_FLOATING_BARS = 12  # bars with no support a scene may have (their subsets are tried)
+
+
+def unheld_bars(scene: Scene, contact: str = "inequality") -> str:
+    """Why the walls and bar contacts do not hold the scene's bars that have no support
+    against their loads, or "" when they do.
+
+    Such a bar can move as a whole (K is singular there). Moving a set S of them together by
+    t in +x changes the energy by −t·F(S), F(S) their net load, and keeps every row that
+    joins S to the rest satisfied exactly when no wall on S's + side, and no bar contact from
+    S to a bar outside it, stands in the way (S closed under "blocks +x"; for equality contact
+    every row blocks both ways). If some such S has F(S) > 0 nothing holds it; with
+    F(S) = 0 nothing presses it against a contact and its position is not determined; the
+    same with −x. With unilateral contact, bars joined by bar contacts whose loads sum to 0
+    are pressed against nothing outside them either (a press fit that squeezes them would hold
+    them; such scenes are refused too). Every subset of up to :data:`MAX_FLOATING_BARS` bars is tried; the moves
+    of sets are exactly the directions in which the energy has no minimum (order-preserving
+    moves are sums of such sets' moves)."""
+    supported = {s.bar for s in scene.supports}
+    floating = [b for b in range(len(scene.bars)) if b not in supported]
+    if not floating:
+        return ""
+    if len(floating) > MAX_FLOATING_BARS:
+        return (f"support: {len(floating)} bars have no support; contactqp holds at most "
+                f"{MAX_FLOATING_BARS} bars by contact alone")
+    place = {b: i for i, b in enumerate(floating)}
+    ground = len(floating)
+    ahead = [0] * (ground + 1)  # bit masks: what blocks each bar's move in +x (ground: last)
+    both_ways = contact == "equality"
+    for wall in scene.walls:
+        if wall.bar in place:
+            i = place[wall.bar]
+            if wall.side == "+" or both_ways:
+                ahead[i] |= 1 << ground
+            if wall.side == "-" or both_ways:
+                ahead[ground] |= 1 << i
+    for c in scene.contacts:
+        a, b = place.get(c.bar_a, ground), place.get(c.bar_b, ground)
+        ahead[a] |= 1 << b  # u_a − u_b <= gap: bar b stops bar a moving in +x
+        if both_ways:
+            ahead[b] |= 1 << a
+    behind = [sum(1 << j for j in range(ground + 1) if ahead[j] >> i & 1)
+              for i in range(ground + 1)]
+    layout = scene.layout
+    net = layout.bar_loads[floating].tolist()
+    size = np.add.reduceat(np.abs(layout.nodal_loads), layout.node_offsets[:-1])[floating].tolist()
+    for subset in sorted(range(1, 1 << ground), key=lambda m: (m.bit_count(), m)):
+        members = [i for i in range(ground) if subset >> i & 1]
+        force = sum(net[i] for i in members)
+        round_off = 1e-12 * sum(size[i] for i in members)
+        for blocks, direction, sign in ((ahead, "+x", 1.0), (behind, "−x", -1.0)):
+            if any(blocks[i] & ~subset for i in members) or sign * force < -round_off:
+                continue
+            names = " and ".join(f"bar[{floating[i]}]" for i in members)
+            unit = scene.unit.force
+            if abs(force) <= round_off:
+                return (f"nothing presses {names} against a wall or bar contact: its loads sum "
+                        f"to 0 {unit} and it is free to move in {direction}, so its position "
+                        "is not determined; give it a [[support]] or a load")
+            return (f"nothing holds {names} against its load of {force:.6g} {unit}: no wall "
+                    f"or bar contact stops it moving in {direction}")
+        # unilateral contact: bars that touch each other and whose loads cancel are pressed
+        # against nothing outside them, and may sit anywhere their walls leave them room
+        if not both_ways and abs(force) <= round_off and _connected(subset, members, ahead,
+                                                                   behind):
+            names = " and ".join(f"bar[{floating[i]}]" for i in members)
+            return (f"nothing presses {names} against a wall or bar contact: its loads sum to "
+                    f"0 {scene.unit.force}, so its position between its walls and contacts is "
+                    "not determined; give it a [[support]] or a load")
+    return ""
+
+
+def _connected(subset: int, members: list[int], ahead: list[int], behind: list[int]) -> bool:
+    """Whether the bars ``members`` (bit mask ``subset``) are joined by bar contacts among
+    themselves (``ahead``/``behind``: the bit masks of what blocks each bar either way)."""
+    reached, frontier = 1 << members[0], [members[0]]
+    while frontier:
+        i = frontier.pop()
+        for j in members:
+            if not reached >> j & 1 and (ahead[i] | behind[i]) >> j & 1:
+                reached |= 1 << j
+                frontier.append(j)
+    return reached == subset
+
+
 __all__ = ["constraint_graph", "equality_conflict", "impossible_constraints",
-           "indeterminate_contacts", "shortest_paths", "tight_cycles"]
+           "indeterminate_contacts", "shortest_paths", "tight_cycles", "unheld_bars"]

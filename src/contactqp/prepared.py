@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 
 from contactqp.batch import Batch, solve_batch, tiled_scene
-from contactqp.errors import OptionError
-from contactqp.feasibility import equality_conflict
+from contactqp.errors import OptionError, SceneError
+from contactqp.feasibility import equality_conflict, unheld_bars
 from contactqp.methods import Method, cases, complementarity
 from contactqp.model import Model, build_model
 from contactqp.model.layout import TOPOLOGY
@@ -77,6 +77,10 @@ class Prepared:
             conflict = equality_conflict(scene)
             if conflict:
                 raise OptionError(conflict)
+        if self.model.floating and scene is not self.scene:  # new loads may not press them
+            unheld = unheld_bars(scene, self.contact)
+            if unheld:
+                raise SceneError(unheld)
         model = self.model if scene is self.scene else self.model.with_layout(scene.layout)
         built = time.perf_counter()
         solution = solve_model(model, self.spec, self.contact, self.formulation, self.options)

@@ -3,7 +3,7 @@ guarantee (tests/test_guarantee.py, benchmarks/guarantee.py).
 
 A scene is drawn from a numpy Generator, so a seed names it. The families are wide on
 purpose: element areas over five decades with stiff and soft elements side by side, moduli
-over three, lengths over two; one to three bars, each held by one or two supports; point and
+over three, lengths over two; one to three bars, each held by one or two supports (or, on request, by its contacts alone); point and
 distributed loads of either sign; walls on one side or both, with zero gaps, small and large
 open gaps and press fits (negative gaps); contacts between bars, with gaps and press fits too. Gaps are drawn relative to
 the displacement the loads cause, so that contacts open, close and touch in every mix.
@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp.errors import SceneError
+from contactqp.feasibility import unheld_bars
 from contactqp.model import build_model
 from contactqp.scene import Bar, BarContact, DistributedLoad, Load, Scene, Support, Wall
 
@@ -43,21 +44,23 @@ def _gap(rng: np.random.Generator, scale: float) -> float:
 
 
 def random_scene(rng: np.random.Generator, max_bars: int = 3, max_elements: int = 8,
-                 contacts: bool = True, contrast: bool = True) -> Scene:
+                 contacts: bool = True, contrast: bool = True, floating: float = 0.0) -> Scene:
     """A random scene (module docstring); redrawn until the scene is valid (a scene whose
     walls leave a node no position is refused by Scene itself). ``contrast``: stiff elements
     beside soft ones (element stiffnesses then span up to 1e13, beyond what a double-precision
-    solve of the saddle-point system resolves on some scenes: a right method is flagged)."""
+    solve of the saddle-point system resolves on some scenes: a right method is flagged).
+    ``floating``: the chance that a bar has no support (held only by its walls and bar
+    contacts; a draw whose loads do not press it against them is redrawn)."""
     for _ in range(100):
         try:
-            return _draw(rng, max_bars, max_elements, contacts, contrast)
+            return _draw(rng, max_bars, max_elements, contacts, contrast, floating)
         except SceneError:
             continue
     raise SceneError("random_scene: no valid scene in 100 draws")
 
 
 def _draw(rng: np.random.Generator, max_bars: int, max_elements: int, contacts: bool,
-          contrast: bool) -> Scene:
+          contrast: bool, floating: float = 0.0) -> Scene:
     bars = tuple(random_bar(rng, max_elements, contrast)
                  for _ in range(int(rng.integers(1, max_bars + 1))))
     supports, loads, distributed = [], [], []
@@ -81,7 +84,10 @@ def _draw(rng: np.random.Generator, max_bars: int, max_elements: int, contacts: 
     loaded = Scene(bars, tuple(supports), tuple(loads), distributed=tuple(distributed))
     model = build_model(loaded)
     scale = max(float(np.abs(model.free_displacement).max(initial=0.0)), 1e-9)
-    held_nodes = set(model.layout.support_nodes.tolist())
+    if floating > 0.0:  # bars that lose their supports (drawn after the gaps' scale)
+        loose = {b for b in range(len(bars)) if rng.random() < floating}
+        supports = [s for s in supports if s.bar not in loose]
+    held_nodes = {model.layout.node(s.bar, s.node) for s in supports}
     walls = []
     for b, bar in enumerate(bars):
         for node in range(bar.n_nodes):
@@ -100,8 +106,12 @@ def _draw(rng: np.random.Generator, max_bars: int, max_elements: int, contacts: 
             if any((c.bar_a, c.node_a, c.bar_b, c.node_b) == (a, node_a, b, node_b) for c in between):
                 continue
             between.append(BarContact(a, node_a, b, node_b, _gap(rng, scale)))
-    return Scene(loaded.bars, loaded.supports, loaded.loads, tuple(walls),
-                 distributed=loaded.distributed, contacts=tuple(between))
+    scene = Scene(loaded.bars, tuple(supports), loaded.loads, tuple(walls),
+                  distributed=loaded.distributed, contacts=tuple(between))
+    unheld = unheld_bars(scene) if floating > 0.0 else ""
+    if unheld:
+        raise SceneError(unheld)
+    return scene
 
 
 __all__ = ["random_bar", "random_scene"]

@@ -56,7 +56,12 @@ def reference(scene: Scene, max_steps: int | None = None,
     no certified answer is reached within them (and, on the rational path, its fallbacks),
     and for a scene beyond the rational path's reach (more than ``MAX_EXACT_NODES`` nodes).
     """
-    if len(scene.bars) == 1 and not scene.contacts:
+    from contactqp.feasibility import unheld_bars
+
+    unheld = unheld_bars(scene)
+    if unheld:
+        raise SceneError(unheld)
+    if len(scene.bars) == 1 and not scene.contacts and scene.supports:
         return statics_reference(scene, max_steps, start)
     from contactqp.reference_exact import rational_reference
 

@@ -13,7 +13,11 @@ consecutive bars).
 For both paths A is found by the textbook loop: add every penetrated row, drop every pulling
 one. The answer is returned only with its certificate: every active row pushes (λ >= 0) and no
 inactive row is penetrated (exactly, on the rational path). The energy is strictly convex
-(every bar has a support), so a certified A gives the unique displacements.
+where every bar has a support, so a certified A gives the unique displacements; a bar with no
+support (held only by its contacts) can move as a whole, and then only the active sets whose
+rows hold it can be solved (the loop starts from every row, and a set that leaves such a bar
+free ends the loop: the next path takes over), and the answer is unique where the loads press
+every such bar against its contacts (:func:`contactqp.feasibility.unheld_bars`).
 
 On the rational path the contact rows are the edges of a graph whose vertices are the free
 nodes and GROUND (the supports): a wall joins its node to GROUND, a bar contact its two nodes.
@@ -111,6 +115,7 @@ class _ExactScene:
     loads: list[Fraction]
     rows: list[tuple[tuple[int, int], ...]]  # (node, ±1) terms of each contact row
     gaps: list[Fraction]
+    floating: bool = False  # some bar has no support: K alone is singular
     solves: int = 0
 
     @classmethod
@@ -123,7 +128,8 @@ class _ExactScene:
         return cls(scene.name, layout.n_nodes, frozenset(layout.support_nodes.tolist()),
                    [Fraction(k) for k in layout.link_stiffness.tolist()],
                    [Fraction(p) for p in layout.nodal_loads.tolist()],
-                   [tuple(r) for r in rows], [Fraction(g) for g in gaps.tolist()])
+                   [tuple(r) for r in rows], [Fraction(g) for g in gaps.tolist()],
+                   len({s.bar for s in scene.supports}) < len(scene.bars))
 
     def edge(self, r: int) -> tuple[int, int]:
         """Row r as an edge (tail, head) of the graph of rows, row r = e_head − e_tail: a "+"
@@ -307,12 +313,16 @@ def _textbook_loop(exact: _ExactScene, max_steps: int) -> Answer | None:
     """Add every penetrated row, drop every pulling one (module docstring); None when an
     active set comes back (the loop would cycle) or after ``max_steps`` solves."""
     tried: set[frozenset[int]] = set()
-    active: list[int] = []
+    # a bar with no support needs rows that hold it before K is invertible: start from all
+    active: list[int] = exact.forest(range(len(exact.rows))) if exact.floating else []
     for _ in range(max_steps):
         if frozenset(active) in tried:
             return None
         tried.add(frozenset(active))
-        u, lam = exact.solve(active)
+        try:
+            u, lam = exact.solve(active)
+        except ArithmeticError:  # the set leaves a bar with no support free to move
+            return None
         if exact.certified(u, lam, active):
             return u, lam
         penetration = exact.penetration(u)
@@ -334,7 +344,10 @@ def _primal_loop(exact: _ExactScene, max_steps: int) -> Answer | None:
     n_rows = len(exact.rows)
     working = exact.forest([r for r, p in enumerate(exact.penetration(u)) if p == 0])
     for _ in range(max_steps):
-        target, lam = exact.solve(working)
+        try:
+            target, lam = exact.solve(working)
+        except ArithmeticError:  # the set leaves a bar with no support free to move
+            return None
         direction = [t - x for t, x in zip(target, u)]
         if any(direction):
             slack = [-p for p in exact.penetration(u)]  # g − C u >= 0
@@ -360,7 +373,10 @@ def _enumeration(exact: _ExactScene) -> Answer | None:
     for size in range(n_rows + 1):
         for subset in combinations(range(n_rows), size):
             if len(exact.forest(subset)) == size:
-                u, lam = exact.solve(subset)
+                try:
+                    u, lam = exact.solve(subset)
+                except ArithmeticError:  # a bar with no support is free to move
+                    continue
                 if exact.certified(u, lam, subset):
                     return u, lam
     return None

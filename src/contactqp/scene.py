@@ -403,8 +403,9 @@ class Wall:
 class Scene:
     """Bars with supports, loads, rigid walls and bar-to-bar contacts, checked on construction.
 
-    ``bars``: one :class:`Bar` or a sequence of them (kept as a tuple either way). Every bar
-    needs a support. Contact rows, in this order everywhere (contact forces, penetrations):
+    ``bars``: one :class:`Bar` or a sequence of them (kept as a tuple either way). A bar
+    with no support is held by its walls and bar contacts alone; its loads must press it
+    against them (checked at the solve, :func:`contactqp.feasibility.unheld_bars`). Contact rows, in this order everywhere (contact forces, penetrations):
     one per wall, then one per bar contact. ``units``: :data:`UNIT_SYSTEMS`.
     """
 
@@ -571,18 +572,20 @@ def _numbering(bars: tuple[Bar, ...]):
 
 
 def _check_supports(scene: Scene, node) -> dict[int, int]:
-    """Every bar held, no node held twice, not every node held: {node: support index}."""
-    if not scene.supports:
-        raise SceneError("support: no support holds the bar; give at least one [[support]]")
+    """No node held twice, not every node held, and something to hold a bar that has no
+    support (a wall or a bar contact: whether its loads press it against one is decided with
+    the contact kind, :func:`contactqp.feasibility.unheld_bars`): {node: support index}."""
     held: dict[int, int] = {}
     for i, s in enumerate(scene.supports):
         at = node(f"support[{i}]", s.bar, s.node)
         if at in held:
             raise SceneError(f"support[{i}].node = {s.node} repeats support[{held[at]}]")
         held[at] = i
-    for b in sorted(set(range(len(scene.bars))) - {s.bar for s in scene.supports}):
-        raise SceneError(f"support: bar[{b}] has no support; every bar needs one [[support]] "
-                         "(a bar held only by contact can move freely)")
+    touched = {w.bar for w in scene.walls} | {c.bar_a for c in scene.contacts} | {
+        c.bar_b for c in scene.contacts}
+    for b in sorted(set(range(len(scene.bars))) - {s.bar for s in scene.supports} - touched):
+        raise SceneError(f"support: bar[{b}] has no support, no wall and no contact: nothing "
+                         "holds it; give it a [[support]]")
     if len(held) == sum(b.n_nodes for b in scene.bars):
         raise SceneError("support: every node is a support; nothing can move")
     return held

@@ -13,8 +13,8 @@ from typing import Any
 import numpy as np
 
 from contactqp.builders import default_scene
-from contactqp.errors import OptionError
-from contactqp.feasibility import equality_conflict
+from contactqp.errors import OptionError, SceneError
+from contactqp.feasibility import equality_conflict, unheld_bars
 from contactqp.methods import Method, checked_options, hull
 from contactqp.model import Condensed, Model, build_model, condense
 from contactqp.result import Result, Solution, make_result
@@ -86,6 +86,9 @@ def checked_call(scene: Scene | str | os.PathLike | None, method: Any, contact: 
         conflict = equality_conflict(scene)
         if conflict:
             raise OptionError(conflict)
+    unheld = unheld_bars(scene, contact)
+    if unheld:
+        raise SceneError(unheld)
     return scene, spec, options
 
 
@@ -102,6 +105,7 @@ def chosen_formulation(model: Model, spec: Method, formulation: str,
         return formulation
     C = model.C
     if ("condensed" not in spec.formulations or model.n_free < AUTO_CONDENSE_NODES
+            or model.floating  # condensing solves with K, singular there
             or not 0 < C.nnz <= 2 * AUTO_CONDENSE
             or np.unique(C.indices).size > AUTO_CONDENSE):
         return "full"

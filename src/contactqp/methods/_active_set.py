@@ -7,6 +7,7 @@ from collections.abc import Callable
 import numpy as np
 
 from contactqp.errors import SolverError
+from contactqp.model import Model, bar_groups
 
 Step = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 Update = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -34,21 +35,71 @@ def default_max_iterations(n_rows: int) -> int:
 
 
 
+def pinning(model: Model) -> Callable[[np.ndarray], np.ndarray]:
+    """For a scene with bars that have no support (:attr:`Model.floating`): a function that
+    adds to an active set the rows that stop each group of such bars the set leaves free
+    (joined to no support or wall by active rows), in the direction its net load moves it
+    (both ways when that is 0): where nothing holds a bar, K + the active rows is singular.
+    The identity for every other scene."""
+    if not model.floating:
+        return lambda active: active
+    layout, scene = model.layout, model.scene
+    bars = len(scene.bars)
+    ground = bars  # the supports and the walls (bar_groups)
+    supported = {s.bar for s in scene.supports}
+    net = layout.bar_loads
+    # per row: the bar it stops moving in +x and the bar it stops moving in −x (−1: none)
+    n_walls = len(scene.walls)
+    ahead = np.full(model.n_contacts, -1)
+    behind = np.full(model.n_contacts, -1)
+    ends = np.full((model.n_contacts, 2), ground)
+    for i, wall in enumerate(scene.walls):
+        (ahead if wall.side == "+" else behind)[i] = wall.bar
+        ends[i, 0] = wall.bar
+    for i, c in enumerate(scene.contacts):
+        ahead[n_walls + i], behind[n_walls + i] = c.bar_a, c.bar_b
+        ends[n_walls + i] = c.bar_a, c.bar_b
+    ends[np.isin(ends, list(supported))] = ground
+
+    def pin(active: np.ndarray) -> np.ndarray:
+        active = np.array(active, dtype=bool)
+        while True:
+            labels = bar_groups(scene, active)  # the ground's label last
+            free = np.flatnonzero(labels[:-1] != labels[-1])
+            if free.size == 0:
+                return active
+            push = np.bincount(labels[free], net[free], minlength=bars + 1)  # per group
+            crossing = labels[ends[:, 0]] != labels[ends[:, 1]]  # not inside one group
+            adding = np.zeros_like(active)
+            for stops, sign in ((ahead, 1.0), (behind, -1.0)):
+                moved = np.isin(stops, free)
+                toward = sign * push[labels[np.maximum(stops, 0)]] >= 0.0
+                adding |= moved & toward & crossing & ~active
+            if not adding.any():
+                return active
+            active |= adding
+
+    return pin
+
+
 def active_set_loop(n_rows: int, step: Step, update: Update, *, method: str,
                     max_iterations: int | None = None,
-                    start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+                    start: np.ndarray | None = None,
+                    pin: Callable[[np.ndarray], np.ndarray] | None = None,
+                    ) -> tuple[np.ndarray, np.ndarray, int]:
     """Iterate ``active -> step(active) = (u, λ) -> update(active, u, λ)`` to a fixed point.
 
-    Starts from ``start`` (default: every wall open). Returns (u, λ, iterations). It
-    terminates: a set that comes back (a cycle) or more than ``max_iterations`` steps is a
-    SolverError that says so.
+    Starts from ``start`` (default: every wall open). ``pin``: applied to every set before
+    it is solved (:func:`pinning`). Returns (u, λ, iterations). It terminates: a set that
+    comes back (a cycle) or more than ``max_iterations`` steps is a SolverError that says so.
     """
     limit = default_max_iterations(n_rows) if max_iterations is None else int(max_iterations)
-    active = np.zeros(n_rows, dtype=bool) if start is None else np.asarray(start, dtype=bool)
+    pin = pin or (lambda active: active)
+    active = pin(np.zeros(n_rows, dtype=bool) if start is None else np.asarray(start, dtype=bool))
     seen = {active.tobytes()}
     for iteration in range(1, limit + 1):
         u, lam = step(active)
-        following = update(active, u, lam)
+        following = pin(update(active, u, lam))
         if np.array_equal(following, active):
             return u, lam, iteration
         key = following.tobytes()

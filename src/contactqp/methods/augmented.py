@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp import linalg
-from contactqp.methods._active_set import DECISION_RTOL, active_set_loop
+from contactqp.methods._active_set import DECISION_RTOL, active_set_loop, pinning
 from contactqp.model import Condensed, Model, wall_stiffness, without_circulation
 from contactqp.result import Solution
 
@@ -65,11 +65,12 @@ def solve_augmented(model: Model | Condensed, contact: str, *, penalty: float | 
                                    float(np.abs(P).max(initial=0.0)))
         return np.where(active, trial > -band, trial > band)
 
+    pin = pinning(model)
     previous = np.inf
     for iteration in range(1, max_iterations + 1):
         if unilateral:
             u, trial, _ = active_set_loop(model.n_contacts, step, update, method="augmented",
-                                          start=lam > 0.0)
+                                          start=lam > 0.0, pin=pin)
             new_lam = np.maximum(trial, 0.0)
         else:
             u, new_lam = step(np.ones(model.n_contacts, dtype=bool))

@@ -36,7 +36,7 @@ def applies(model: object, contact: str) -> bool:
     """The hull loop solves unilateral walls on the full formulation's chain (no bar
     contacts: a bar contact couples two chains)."""
     return (isinstance(model, Model) and contact == "inequality" and not model.scene.contacts
-            and model.n_contacts > 0)
+            and model.n_contacts > 0 and not model.floating)
 
 
 class WallsOnChain:

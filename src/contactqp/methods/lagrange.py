@@ -25,6 +25,7 @@ from contactqp.methods._active_set import (
     ActiveSetCycle,
     active_set_loop,
     displacement_tolerance,
+    pinning,
 )
 from contactqp.methods.complementarity import solve_lemke
 from contactqp.model import (
@@ -191,11 +192,12 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
             return solution
         info = {"active_set": "hull, then passed (the hull's set came back)"}
     reason = None
-    lemke_fits = (model.n_contacts <= LEMKE_LIMIT
+    lemke_fits = (model.n_contacts <= LEMKE_LIMIT and not model.floating
                   and model.n_free * model.n_contacts <= LEMKE_ENTRIES)
     try:
         u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="lagrange",
-                                             max_iterations=max_iterations, start=start)
+                                             max_iterations=max_iterations, start=start,
+                                             pin=pinning(model))
         # a set can settle with a wall still passed: a dependent row (zero gaps closing a
         # loop of walls and bar contacts) is never added (independent_rows)
         if (C @ u - g > displacement_tolerance(u, g, P, model.K)).any():

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp import linalg
-from contactqp.methods._active_set import active_set_loop, displacement_tolerance
+from contactqp.methods._active_set import active_set_loop, displacement_tolerance, pinning
 from contactqp.model import Condensed, Model, wall_stiffness
 from contactqp.result import Solution
 
@@ -55,5 +55,5 @@ def solve_penalty(model: Model | Condensed, contact: str, *, penalty: float | No
         return np.where(active, pen > -tol, pen > tol)
 
     u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="penalty",
-                                         max_iterations=max_iterations)
+                                         max_iterations=max_iterations, pin=pinning(model))
     return Solution(u, lam, solver="penalty", iterations=iterations, info={"penalty": eps})

@@ -22,6 +22,7 @@ from contactqp.model.condense import Condensed, condense
 from contactqp.model.layout import (
     ContactRows,
     Layout,
+    bar_groups,
     contact_forces_on_nodes,
     count_up_to,
     element_forces,
@@ -39,7 +40,7 @@ from contactqp.model.layout import (
 )
 
 __all__ = [
-    "Condensed", "ContactRows", "Layout", "Model", "build_model", "condense",
+    "Condensed", "ContactRows", "Layout", "Model", "bar_groups", "build_model", "condense",
     "contact_forces_on_nodes", "count_up_to", "determinate_chain_solve",
     "displacement_scale", "displacement_scale_rule", "element_forces", "elongation_rows",
     "force_scale_rule", "in_set", "largest",

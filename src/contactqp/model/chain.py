@@ -70,7 +70,12 @@ class Model:
     def solve_K(self, rhs: np.ndarray) -> np.ndarray:
         """K⁻¹ rhs (every column of ``rhs``): by statics where every bar is held by one
         support (:func:`determinate_chain_solve`, exact to round-off), else one banded
-        Cholesky factorisation (LAPACK pbsv). SolverError when K is not positive definite."""
+        Cholesky factorisation (LAPACK pbsv). SolverError when K is not positive definite,
+        and when a bar has no support (:attr:`floating`): K is singular there."""
+        if self.floating:
+            raise SolverError(
+                f"bar[{self.floating[0]}] has no support, so K is singular and has no inverse; "
+                f"the methods that need K⁻¹ cannot solve this scene ({FLOATING_METHODS} can)")
         if self.determinate is not None:
             rhs = np.asarray(rhs, dtype=float)
             out = np.empty(rhs.shape)
@@ -84,11 +89,36 @@ class Model:
             raise SolverError(f"K is not positive definite ({error})") from None
 
     @cached_property
+    def floating(self) -> tuple[int, ...]:
+        """The bars with no support, held only by their walls and bar contacts (K is then
+        only positive semidefinite: each such bar can move as a whole)."""
+        supported = {s.bar for s in self.scene.supports}
+        return tuple(b for b in range(len(self.scene.bars)) if b not in supported)
+
+    @cached_property
+    def held(self) -> Model:
+        """This model, or where bars have no support (:attr:`floating`) the model with each
+        such bar tied to zero at its node 0 by a spring as stiff as the whole bar (its
+        elements in series), so that K is positive definite. For scales only (U, the
+        stiffness the walls see, a solver's scaling): never for an answer."""
+        if not self.floating:
+            return self
+        band = self.band.copy()
+        layout = self.layout
+        column = np.searchsorted(self.free, layout.node_offsets[list(self.floating)])
+        band[0, column] += [1.0 / float(self.scene.bars[b].compliance[-1])
+                            for b in self.floating]
+        model = Model(layout, self.free, band, self.P, self.C, self.g)
+        model.__dict__["floating"] = ()
+        model.__dict__["determinate"] = None  # the springs are not supports
+        return model
+
+    @cached_property
     def determinate(self) -> tuple[tuple[slice, int], ...] | None:
         """When every bar is held by exactly one support (statically determinate): per bar,
         the slice of its free nodes and the support's position in that slice. Else None."""
         scene = self.scene
-        if len(scene.supports) != len(scene.bars):
+        if sorted(s.bar for s in scene.supports) != list(range(len(scene.bars))):
             return None
         first = np.searchsorted(self.free, self.layout.node_offsets)
         return tuple((slice(int(first[b]), int(first[b + 1])), support)
@@ -144,7 +174,7 @@ class Model:
     @cached_property
     def displacement_scale(self) -> float:
         """U: the scene's displacement scale (:func:`displacement_scale`)."""
-        return displacement_scale(self.free_displacement, self.g, self.layout)
+        return displacement_scale(self.held.free_displacement, self.g, self.layout)
 
     def full_displacements(self, u_free: np.ndarray) -> np.ndarray:
         """Displacements of every node, zero at the supports."""
@@ -219,6 +249,8 @@ def free_loads(layout: Layout) -> np.ndarray:
     """P: the nodal loads on the free nodes (the supports taken out), in order."""
     return np.delete(layout.nodal_loads, layout.support_nodes)
 
+
+FLOATING_METHODS = "lagrange, penalty, augmented, qp and nitsche"  # the methods that solve bars with no support
 
 GREEN_ROWS = 16  # right-hand sides with at most this many loaded rows use the Green's function
 
@@ -320,6 +352,7 @@ def wall_stiffness(model: Model | Condensed) -> float | None:
     nodes = np.unique(model.C.indices)
     if nodes.size == 0:
         return None
+    model = model.held if isinstance(model, Model) else model
     if nodes.size > EXACT_WALL_STIFFNESS_LIMIT:
         K_BB = model.K[nodes][:, nodes]
         return float(np.abs(K_BB).sum(axis=1).max())

@@ -34,6 +34,7 @@ class Condensed:
 
     full: Model
     nodes: np.ndarray  # the contact nodes, as unknowns of ``full``
+    floating = ()  # condensing solves with K: every bar has a support (Model.floating)
     band: np.ndarray
     P: np.ndarray
     C: sp.csr_array

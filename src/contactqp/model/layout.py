@@ -84,6 +84,11 @@ class Layout:
         return self.node_bar[nodes]
 
     @cached_property
+    def bar_loads(self) -> np.ndarray:
+        """The net load on each bar (N, +x): its nodal loads summed."""
+        return np.add.reduceat(self.nodal_loads, self.node_offsets[:-1])
+
+    @cached_property
     def node_bar(self) -> np.ndarray:
         """The bar of every global node."""
         return _read_only(np.repeat(np.arange(len(self.scene.bars)), np.diff(self.node_offsets)))
@@ -525,6 +530,27 @@ def load_force_terms(layout: Layout) -> np.ndarray:
     return np.maximum(np.maximum(np.abs(left), np.abs(right)), np.abs(loads))
 
 
-__all__ = ["ContactRows", "Layout", "contact_forces_on_nodes", "element_forces", "in_set",
+__all__ = ["ContactRows", "Layout", "bar_groups", "contact_forces_on_nodes", "element_forces", "in_set",
            "largest", "link_forces", "load_force_scale", "load_force_terms", "node_set",
            "penetration", "run_ends", "run_starts", "seen_stiffness", "spread"]
+
+
+def bar_groups(scene: Scene, rows: np.ndarray) -> np.ndarray:
+    """The connected groups of bars when the contact rows ``rows`` (one bool per row) join
+    them: a wall joins its bar, and a support its bar, to one more vertex, the ground (last).
+    One label per bar, then the ground's: a bar labelled as the ground is held in place."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    bars = len(scene.bars)
+    n_walls = len(scene.walls)
+    ends = [(s.bar, bars) for s in scene.supports]
+    for i in np.flatnonzero(rows):
+        if i < n_walls:
+            ends.append((scene.walls[i].bar, bars))
+        else:
+            contact = scene.contacts[i - n_walls]
+            ends.append((contact.bar_a, contact.bar_b))
+    a, b = np.array(ends, dtype=np.intp).reshape(-1, 2).T
+    graph = sp.coo_array((np.ones(a.size), (a, b)), shape=(bars + 1, bars + 1))
+    return connected_components(graph, directed=False)[1]

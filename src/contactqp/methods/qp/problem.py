@@ -135,7 +135,8 @@ def scales(model: Model | Condensed) -> tuple[float, float]:
     e[np.flatnonzero(model.P)] = 1.0
     e[model.C.indices] = 1.0
     if e.any():
-        k = 1.0 / float(np.abs(model.solve_K_and_loads(e)).max())
+        held = model.held if isinstance(model, Model) else model  # a bar with no support: K + springs
+        k = 1.0 / float(np.abs(held.solve_K_and_loads(e)).max())
     else:
         k = float(model.K.diagonal().max())
     # U rounded to a power of two (of metres, so that a solver sees the same numbers whatever

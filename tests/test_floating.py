@@ -1,0 +1,159 @@
+"""Bars held only by contact: a bar with no support, pressed against a wall or another bar by
+its loads. K is singular there (the bar can move as a whole); Lagrange multipliers, the penalty,
+the augmented Lagrangian, the QP solvers and Nitsche solve such scenes, the methods that need K⁻¹ refuse
+them, and a scene whose loads do not press such a bar against anything is a clear error.
+
+Symbols: k_e = E·A_e/L_e, F a load (N), g a gap (m), λ a contact force (N). Every expected
+number is statics by hand: the only outside forces on a bar with no support are its loads and
+its contacts, so the contacts carry its net load.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import contactqp
+from contactqp import Bar, BarContact, Load, Scene, Support, Wall
+from contactqp.feasibility import MAX_FLOATING_BARS, unheld_bars
+from contactqp.reference import reference
+
+E = 200e9
+AREAS = [1e-3, 5e-4, 2e-4, 1e-4]  # k_e = E·A/0.25 m: 8e8, 4e8, 1.6e8, 8e7 N/m
+BAR = Bar.from_areas(AREAS, E, length=1.0)
+K_E = E * np.array(AREAS) / 0.25
+# methods and options that solve bars held only by contact
+SOLVING = [("lagrange", {}), ("penalty", {}), ("augmented", {}), ("qp", {"backend": "clarabel"}),
+           ("qp", {"backend": "osqp", "accuracy": "high"}), ("qp", {"backend": "cvxpy"}),
+           ("nitsche", {})]
+# relative force tolerance per method: the explicit methods to round-off, the penalty to its
+# s/ε ≈ 1e-6 (default ε = 1e6 × the stiffness the walls see), solvers to their settings
+TOLERANCE = {"lagrange": 1e-12, "penalty": 1e-5, "augmented": 1e-10, "qp": 1e-5,
+             "nitsche": 1e-10}
+
+
+def free_bar(force: float = 1e3, gap: float = 1e-4) -> Scene:
+    """BAR with no support, ``force`` at node 0, a "+" wall ``gap`` beyond node 4."""
+    return Scene(BAR, (), (Load(0, force),), (Wall(4, gap, "+"),), name="free bar")
+
+
+@pytest.mark.parametrize(("method", "options"), SOLVING)
+def test_a_free_bar_pressed_against_a_wall_carries_its_whole_load(method, options):
+    F, g = 1e3, 1e-4
+    result = contactqp.solve(free_bar(F, g), method, **options)
+    assert result.verified, result.message
+    assert result.contact_force[0] == pytest.approx(F, rel=TOLERANCE[method])
+    # node 4 at the wall (the penalty: λ/ε past it), each element shortened by F/k_e
+    tip = result.u[4]
+    # the penalty and Nitsche leave a penetration λ/ε, λ/γ
+    assert tip == pytest.approx(g, rel=1e-3 if method in ("penalty", "nitsche") else 1e-6)
+    expected = tip + np.cumsum((F / K_E)[::-1])[::-1]  # u_j = u_4 + Σ_(e>=j) F/k_e
+    np.testing.assert_allclose(result.u[:4], expected, rtol=1e-6)
+
+
+@pytest.mark.parametrize(("method", "options"), SOLVING)
+def test_two_bars_between_walls(method, options):
+    """Bar 0 (load F1 at node 1) between a "−" wall at its node 0 and a contact from its node
+    4 to bar 1's node 0; bar 1 (load F2 at node 2) against a "+" wall at its node 4. With F1 > 0
+    and F1 + F2 > 0 both are pushed to the "+" wall: the contact carries F1, the "+" wall
+    F1 + F2, the "−" wall nothing. (No load on a contact node: Nitsche reads the contact force
+    from the stress of the element there.)"""
+    F1, F2 = 1e3, -3e2
+    scene = Scene((BAR, BAR), (), (Load(1, F1, 0), Load(2, F2, 1)),
+                  (Wall(0, 2e-4, "-", 0), Wall(4, 1e-4, "+", 1)),
+                  contacts=(BarContact(0, 4, 1, 0, 5e-5),))
+    result = contactqp.solve(scene, method, **options)
+    assert result.verified, result.message
+    tolerance = TOLERANCE[method] * (F1 + F2)
+    np.testing.assert_allclose(result.contact_force, [0.0, F1 + F2, F1], atol=tolerance)
+
+
+@pytest.mark.parametrize(("method", "options"), SOLVING)
+def test_a_free_bar_pressed_against_a_supported_one(method, options):
+    """Bar 1 held at its node 4; bar 0, free, pushed by F at its node 1 onto bar 1's node 0
+    across a gap g: the contact carries F, and bar 1's node 0 moves F·Σ1/k_e."""
+    F, g = 7e2, 5e-5
+    scene = Scene((BAR, BAR), (Support(4, 1),), (Load(1, F, 0),),
+                  contacts=(BarContact(0, 4, 1, 0, g),))
+    result = contactqp.solve(scene, method, **options)
+    assert result.verified, result.message
+    assert result.contact_force[0] == pytest.approx(F, rel=TOLERANCE[method])
+    assert result.u[5] == pytest.approx(F * np.sum(1.0 / K_E), rel=1e-5)
+
+
+def test_equality_contact_holds_a_free_bar_that_its_load_pulls_away():
+    """With equality contact the wall may pull: it holds the bar against a load in −x."""
+    F = 1e3
+    scene = free_bar(-F)
+    assert unheld_bars(scene, "equality") == ""
+    result = contactqp.solve(scene, "lagrange", "equality")
+    assert result.verified, result.message
+    assert result.contact_force[0] == pytest.approx(-F, rel=1e-12)
+    with pytest.raises(contactqp.SceneError, match=r"nothing holds bar\[0\] against its load "
+                                                   r"of -1000 N.*−x"):
+        contactqp.solve(scene, "lagrange")
+
+
+def test_a_free_bar_with_nothing_in_the_way_of_its_load_is_an_error():
+    scene = Scene((BAR, BAR), (Support(0, 0),), (Load(2, 5e2, 1),),
+                  contacts=(BarContact(0, 4, 1, 0, 1e-4),))  # bar 1 is pushed away from bar 0
+    for method in ("lagrange", "penalty", "qp"):
+        with pytest.raises(contactqp.SceneError, match=r"nothing holds bar\[1\] against its "
+                                                       r"load of 500 N.*\+x"):
+            contactqp.solve(scene, method)
+    with pytest.raises(contactqp.SceneError, match=r"nothing holds bar\[1\]"):
+        reference(scene)
+
+
+def test_bars_whose_loads_cancel_are_not_determined():
+    """Two free bars in contact, pushed into each other by equal and opposite loads, between
+    walls with room: they may sit anywhere between the walls."""
+    scene = Scene((BAR, BAR), (), (Load(0, 1e3, 0), Load(4, -1e3, 1)),
+                  (Wall(0, 1e-4, "-", 0), Wall(4, 1e-4, "+", 1)),
+                  contacts=(BarContact(0, 4, 1, 0, 0.0),))
+    with pytest.raises(contactqp.SceneError, match=r"nothing presses bar\[0\] and bar\[1\] "
+                                                   r"against a wall or bar contact: its loads "
+                                                   r"sum to 0 N"):
+        contactqp.solve(scene, "lagrange")
+
+
+def test_a_bar_with_no_support_wall_or_contact_is_refused_when_built():
+    with pytest.raises(contactqp.SceneError, match=r"support: bar\[1\] has no support, no wall "
+                                                   r"and no contact"):
+        Scene((BAR, BAR), (Support(0, 0),))
+
+
+def test_too_many_free_bars_are_refused_with_the_limit():
+    n = MAX_FLOATING_BARS + 1
+    bars = (BAR,) * n
+    contacts = tuple(BarContact(i, 4, i + 1, 0, 0.0) for i in range(n - 1))
+    scene = Scene(bars, (), (Load(0, 1.0, 0),), (Wall(4, 0.0, "+", n - 1),), contacts=contacts)
+    assert f"at most {MAX_FLOATING_BARS} bars" in unheld_bars(scene)
+
+
+@pytest.mark.parametrize("method", ["lemke", "pgs", "semismooth_newton"])
+def test_methods_that_need_the_inverse_of_K_refuse_with_the_reason(method):
+    with pytest.raises(contactqp.SolverError, match=r"bar\[0\] has no support, so K is singular"):
+        contactqp.solve(free_bar(), method)
+    with pytest.raises(contactqp.SolverError, match=r"lagrange, penalty, augmented, qp and "
+                                                    r"nitsche can"):
+        contactqp.solve(free_bar(), "lagrange", formulation="condensed")
+
+
+def test_a_prepared_free_bar_refuses_loads_that_pull_it_away():
+    prepared = contactqp.prepare(free_bar(), "lagrange")
+    assert prepared.solve(loads=[2e3]).contact_force[0] == pytest.approx(2e3, rel=1e-12)
+    with pytest.raises(contactqp.SceneError, match=r"nothing holds bar\[0\]"):
+        prepared.solve(loads=[-2e3])
+
+
+def test_an_answer_that_leaves_a_free_bar_unheld_is_not_verified():
+    """u and λ = 0 balance nothing; and an answer that puts the bar anywhere with λ = F on a
+    wall it does not touch says nothing about where the bar is."""
+    scene = free_bar()
+    found = contactqp.check(scene, np.zeros(5), [0.0], [], "inequality")
+    assert not found.verified
+    exact = reference(scene)
+    shifted = exact.displacement - 1e-3  # the bar 1 mm short of the wall, still λ = F
+    found = contactqp.check(scene, shifted, exact.contact_force, [], "inequality")
+    assert not found.verified
