@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 import contactqp
@@ -18,6 +20,8 @@ from closed_forms import (
     default_closed_form,
     hand_scene,
 )
+
+EXAMPLES_DIR = Path(__file__).parent.parent / "examples"
 
 
 @pytest.mark.parametrize("method", ["lagrange", "penalty"])
@@ -78,3 +82,75 @@ def test_the_yield_check_works_in_both_unit_systems():
         warning = next(w for w in result.warnings if w.startswith("stress beyond yield"))
         assert f"element 1 carries {stress / 1e6:.1f} MPa" in warning, warning
         assert result.stress_ratio == pytest.approx(stress / 200e6, rel=1e-12)  # ulps
+
+
+def test_repr_is_one_short_line():
+    """method, contact, verdict and the largest force (the closed form, to 10 digits); not the
+    1700-character dump of every field and the scene."""
+    _, lam = default_closed_form()
+    text = repr(contactqp.solve())
+    assert "\n" not in text and len(text) < 120
+    assert text == (f"<Result lagrange, inequality contact, verified, largest contact force "
+                    f"{lam:.10g} N on wall[0]>")
+    flagged = repr(contactqp.solve(method="penalty", penalty=1e8))  # ε f ≈ 1.3: far off
+    assert "NOT verified" in flagged
+
+
+def test_summary_says_what_the_check_guarantees():
+    result = contactqp.solve()
+    _, lam = default_closed_form()
+    text = result.summary()
+    lines = text.splitlines()
+    assert lines[0] == f"scene: {DEFAULT_SCENE.name} (SI)"
+    assert len(lines) <= 15 and max(map(len, lines)) <= 110
+    assert f"within {result.force_error_bound:.1e} N" in text  # the bound, in words
+    assert f"contact forces (N): wall[0] {lam:.10g}" in text
+    assert f"support reactions (N): support[0] {-(DEFAULT_F - lam):.10g}" in text
+    assert "largest penetration:" in text and "equilibrium" in text
+    assert "stress beyond yield" in text
+
+
+def test_summary_of_a_flagged_answer_gives_the_reason():
+    """ε = 1e8 N/m leaves the penalty's force 57 % of λ: the summary says why it is not
+    verified (the check's message), not a guarantee it does not have."""
+    result = contactqp.solve(method="penalty", penalty=1e8)
+    text = result.summary()
+    assert "NOT verified: feasibility residual" in text.replace("\n    ", " ")
+    assert "within" not in text
+
+
+def test_summary_counts_the_walls_that_carry_no_force():
+    """A wall beside each of 8 nodes, one pushing (the exact reference has one non-zero)."""
+    from contactqp.reference import reference
+
+    scene = contactqp.load_scene(EXAMPLES_DIR / "wall_at_every_node.toml")
+    exact = reference(scene).contact_force
+    pushing = int(np.argmax(exact))
+    text = contactqp.solve(scene).summary()
+    assert f"wall[{pushing}] {exact[pushing]:.10g}; 7 of 8 carry none" in text
+    equality = contactqp.solve(scene, contact="equality").summary()
+    assert "non-physical: a contact pulls" in equality
+
+
+def test_html_repr_is_a_small_escaped_table():
+    from html.parser import HTMLParser
+
+    class Cells(HTMLParser):
+        def __init__(self):
+            super().__init__()
+            self.cells, self.rows = [], 0
+
+        def handle_starttag(self, tag, attrs):
+            self.rows += tag == "tr"
+
+        def handle_data(self, data):
+            self.cells.append(data)
+
+    scene = contactqp.Scene(DEFAULT_SCENE.bars, DEFAULT_SCENE.supports, DEFAULT_SCENE.loads,
+                            DEFAULT_SCENE.walls, name="<b>cone</b> & wall")
+    parsed = Cells()
+    parsed.feed(contactqp.solve(scene)._repr_html_())
+    assert 5 <= parsed.rows <= 12
+    assert "<b>cone</b> & wall" in parsed.cells  # escaped in the HTML, the name again parsed
+    _, lam = default_closed_form()
+    assert any(f"{lam:.10g} N" in cell for cell in parsed.cells)

@@ -4,6 +4,7 @@ check (:mod:`contactqp.check`) beside what the solver itself claimed."""
 
 from __future__ import annotations
 
+import html
 import json
 import math
 import time
@@ -12,7 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from contactqp.check import TOLERANCES, Tolerances, check
+from contactqp import formatting
+from contactqp.check import GUARANTEE, TOLERANCES, Tolerances, check
 from contactqp.model import (
     Layout,
     Model,
@@ -22,6 +24,9 @@ from contactqp.model import (
     penetration,
 )
 from contactqp.scene import Scene
+
+
+TOUCHING = 1e-12  # a penetration within this of U is round-off: the contact touches
 
 
 @dataclass(frozen=True)
@@ -110,6 +115,99 @@ class Result:
         """method (and solver where it says more), e.g. 'penalty' or 'qp/osqp'."""
         return self.method if self.solver == self.method else f"{self.method}/{self.solver}"
 
+    def __repr__(self) -> str:
+        """One line: method, contact, verdict, the largest contact force."""
+        return f"<Result {self.label}, {self.contact} contact, {self._verdict()}, {self._largest()}>"
+
+    def _verdict(self) -> str:
+        return ("verified" if self.verified else "NOT verified") + (
+            "" if self.physical else ", a contact pulls")
+
+    def _largest(self) -> str:
+        """'largest contact force 175870.4536 N on wall[0]' (or 'no contacts')."""
+        if not self.contact_force.size:
+            return "no contacts"
+        i = formatting.largest_entry(self.contact_force)
+        name = formatting.row_names(self.scene)[i]
+        return (f"largest contact force {formatting.force(self.contact_force[i], self.force_scale)}"
+                f" {self.scene.unit.force} on {name}")
+
+    def _guarantee(self) -> str:
+        """What ``verified`` says of this answer, or why it is not verified."""
+        unit = self.scene.unit
+        if not self.verified:
+            return f"NOT verified: {self.message}"
+        return (f"verified: every contact force and reaction is within "
+                f"{formatting.number(self.force_error_bound, '.1e')} {unit.force}, every "
+                f"displacement within {formatting.number(self.displacement_error_bound, '.1e')} "
+                f"{unit.length} of the exact answer (the check's bounds; at most "
+                f"{GUARANTEE[0]:.0e}·F and {GUARANTEE[1]:.0e}·U, F = "
+                f"{formatting.number(self.force_scale, '.4g')} {unit.force}, U = "
+                f"{formatting.number(self.displacement_scale, '.4g')} {unit.length})")
+
+    def _forces(self, most: int = 8) -> str:
+        """The contact forces that carry force (more than 1e-5·F), the largest first, at most
+        ``most`` of them."""
+        names = formatting.row_names(self.scene)
+        forces, scale = self.contact_force, self.force_scale
+        shown = [i for i in np.argsort(-np.abs(forces), kind="stable")
+                 if formatting.carrying(forces[i], scale)]
+        text = ", ".join(f"{names[i]} {formatting.force(forces[i], scale)}" for i in shown[:most])
+        if len(shown) > most:
+            text += f", … ({len(shown) - most} more)"
+        rest = forces.size - len(shown)
+        if rest:
+            text += f"{'; ' if shown else ''}{rest} of {forces.size} carry none"
+        return text
+
+    def _penetration(self) -> str:
+        i = int(np.argmax(self.penetration))
+        depth = formatting.number(self.penetration[i], ".3g")
+        touching = abs(self.penetration[i]) <= TOUCHING * self.displacement_scale
+        state = "touching" if touching else ("past its gap" if self.penetration[i] > 0 else "open")
+        return (f"{depth} {self.scene.unit.length} at {formatting.row_names(self.scene)[i]} "
+                f"({state})")
+
+    def summary(self) -> str:
+        """A few lines a person reads: the scene, the method, whether the answer is verified and
+        what that guarantees, the contact forces, the largest penetration, the residuals and
+        the warnings (stress beyond yield)."""
+        unit = self.scene.unit
+        residuals = ", ".join(f"{name.replace('_', ' ')} {formatting.number(value, '.1e')}"
+                              for name, value in self.residuals.items() if value is not None)
+        lines = [f"scene: {self.scene.name} ({self.scene.units})",
+                 f"method: {self.label}, {self.contact} contact, {1e3 * self.time:.2f} ms",
+                 self._guarantee()]
+        if self.contact_force.size:
+            lines += [f"contact forces ({unit.force}): {self._forces()}",
+                      f"largest penetration: {self._penetration()}"]
+        lines += [f"support reactions ({unit.force}): " + ", ".join(
+                      f"support[{i}] {formatting.force(r, self.force_scale)}"
+                      for i, r in enumerate(self.reactions)),
+                  f"residuals (of F and U): {residuals}"]
+        if not self.physical:
+            lines.append("non-physical: a contact pulls (the negative forces above), which a "
+                         "rigid wall cannot; equality contact holds each node on its wall")
+        lines += [f"warning: {w}" for w in self.warnings]
+        return formatting.wrap("\n".join(lines))
+
+    def _repr_html_(self) -> str:
+        """A small table for notebooks: the summary's numbers, one row each."""
+        unit = self.scene.unit
+        rows = [("scene", self.scene.name), ("method", f"{self.label}, {self.contact} contact"),
+                ("verified", self._verdict()), ("contact force", self._largest()),
+                ("largest residual", formatting.number(max(
+                    (v for v in self.residuals.values() if v is not None), default=0.0), ".1e")),
+                ("force error bound",
+                 f"{formatting.number(self.force_error_bound, '.1e')} {unit.force}"),
+                ("time", f"{1e3 * self.time:.2f} ms")]
+        if self.contact_force.size:
+            rows.insert(4, ("largest penetration", self._penetration()))
+        rows += [("warning", w) for w in self.warnings]
+        body = "".join(f"<tr><th style='text-align:left'>{html.escape(k)}</th>"
+                       f"<td style='text-align:left'>{html.escape(v)}</td></tr>" for k, v in rows)
+        return f"<table>{body}</table>"
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (plain floats and lists)."""
         return {
@@ -130,6 +228,7 @@ class Result:
         }
 
     def to_json(self, indent: int | None = 2) -> str:
+        """:meth:`to_dict` as JSON text (no NaN: a non-finite number is null)."""
         return json.dumps(self.to_dict(), indent=indent, allow_nan=False)
 
 
