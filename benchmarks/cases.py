@@ -36,8 +36,9 @@ def median_time(function: Callable[[], object], repeats: int) -> float:
 
 
 def floor(scene: contactqp.Scene, repeats: int) -> float:
-    """One banded factor-and-solve of K (K already in band storage)."""
-    model = build_model(scene)
+    """One banded factor-and-solve of K (K already in band storage; where a bar has no
+    support, K with a spring on it, :attr:`contactqp.Model.held`: K alone is singular)."""
+    model = build_model(scene).held
     band = model.band.copy()
     return median_time(lambda: sla.solveh_banded(band, model.P, lower=True), repeats)
 
@@ -56,6 +57,13 @@ def default_with(gap: float | None = None, load_factor: float = 1.0) -> contactq
     if gap is not None:
         scene = scene.with_walls((Wall(4, gap),))
     return scene.scaled_loads(load_factor) if load_factor != 1.0 else scene
+
+
+def free_bar() -> contactqp.Scene:
+    """The default scene without its support: the load presses the bar against the wall,
+    which carries all of it (K is singular: the bar is held by the contact alone)."""
+    scene = contactqp.default_scene()
+    return contactqp.Scene(scene.bars, (), scene.loads, scene.walls, name="free bar")
 
 
 def touching() -> contactqp.Scene:

@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 
 import contactqp
-from cases import default_with, floor, machine, obstacle, tapered_scene, touching
+from cases import default_with, floor, free_bar, machine, obstacle, tapered_scene, touching
 from contactqp.errors import OptionError, SceneError, SolverError
 from contactqp.methods import qp as qpmod
 from contactqp.methods.complementarity import LCP_ENTRIES, LCP_ROWS, contact_lcp
@@ -97,6 +97,7 @@ CASES = [
     Case("touching", "touching", touching, quick=True),
     Case("gap 0", "gap 0", lambda: default_with(gap=0.0), quick=True),
     Case("press fit", "press fit", lambda: default_with(gap=-1e-4), quick=True),
+    Case("free bar", "free bar", free_bar, quick=True),
 ]
 
 
@@ -336,7 +337,9 @@ def conditioning(model: contactqp.Model) -> dict[str, float | None]:
     k = model.layout.element_stiffness
     out: dict[str, float | None] = {"stiffness_contrast": float(k.max() / k.min()),
                                     "cond_K": None, "cond_W": None, "rank_W": None}
-    if model.n_free <= CONDITION_LIMIT and model.n_contacts <= CONDITION_LIMIT:
+    if model.floating:  # K singular, W undefined (a bar held by contact alone)
+        out["cond_K"] = float("inf")
+    elif model.n_free <= CONDITION_LIMIT and model.n_contacts <= CONDITION_LIMIT:
         out["cond_K"] = float(np.linalg.cond(model.K.toarray()))
         W, *_ = contact_lcp(model)
         out["cond_W"] = float(np.linalg.cond(W)) if W.size else None
