@@ -1,8 +1,14 @@
 """contactqp: contact mechanics of elastic bars written as constrained optimisation.
 
-scene → model (K, P, C, g) → method → checked Result. See the README for the conventions and
-the architecture. Importing contactqp loads no QP solver and no matplotlib: a backend is
-imported when it is first used, matplotlib when a chart is drawn.
+scene → model (K, P, C, g) → method → checked Result → report. See the README for the
+conventions and the architecture. Importing contactqp loads no QP solver and no matplotlib: a
+backend is imported when it is first used, matplotlib when a chart is drawn
+(:mod:`contactqp.plot`).
+
+>>> import contactqp
+>>> result = contactqp.solve()                  # the default scene, Lagrange multipliers
+>>> print(result.summary())                     # doctest: +SKIP
+>>> print(contactqp.table(contactqp.compare()))  # every method, one table  # doctest: +SKIP
 """
 
 from contactqp.builders import (
@@ -27,6 +33,7 @@ from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.qp import QPProblem, available_qp_solvers, qp_problem
 from contactqp.model import Layout, Model, build_model
 from contactqp.prepared import Batch, Prepared, prepare
+from contactqp.report import detail_table, table
 from contactqp.result import Result
 from contactqp.scene import (
     UNIT_SYSTEMS,
@@ -41,16 +48,17 @@ from contactqp.scene import (
 )
 from contactqp.scene_io import load_scene, scene_from_dict, scene_to_toml
 from contactqp.solve import solve
+from contactqp.studies import Run, compare, penalty_sweep
 
 __version__ = "0.1.0"
 
 __all__ = [
     "CONTACT_KINDS", "FORMULATIONS", "GUARANTEE", "METHODS", "TOLERANCES", "UNIT_SYSTEMS", "Bar",
     "BarContact", "Batch", "ContactqpError", "DistributedLoad", "Layout", "Load", "LoadPath",
-    "Model", "OptionError", "Prepared", "QPProblem", "Result", "Scene", "SceneError",
+    "Model", "OptionError", "Prepared", "QPProblem", "Result", "Run", "Scene", "SceneError",
     "SolverError", "SolverNotAvailable", "Support", "Tolerances", "Units", "Wall", "__version__",
-    "available_qp_solvers", "build_model", "channel", "check", "convert_units",
-    "default_scene", "first_contact_factor", "flat_patch", "load_path", "load_scene", "minimal",
-    "obstacle", "prepare", "qp_problem", "scene_from_dict", "scene_to_toml", "solve",
-    "wall_at_every_node",
+    "available_qp_solvers", "build_model", "channel", "check", "compare", "convert_units",
+    "default_scene", "detail_table", "first_contact_factor", "flat_patch", "load_path",
+    "load_scene", "minimal", "obstacle", "penalty_sweep", "prepare", "qp_problem",
+    "scene_from_dict", "scene_to_toml", "solve", "table", "wall_at_every_node",
 ]

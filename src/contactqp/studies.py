@@ -1,4 +1,5 @@
-"""Several solves of one scene, compared: every method side by side, and the penalty sweep."""
+"""Several solves of one scene, compared: every method side by side (against the exact
+reference where there is one), and the penalty sweep."""
 
 from __future__ import annotations
 
@@ -14,14 +15,17 @@ from contactqp.builders import (
     DEFAULT_MODULUS,
     default_scene,
 )
-from contactqp.errors import ContactqpError
+from contactqp.errors import ContactqpError, SceneError
 from contactqp.methods import CONTACT_KINDS
 from contactqp.methods.penalty import TEXTBOOK_PENALTY
 from contactqp.methods.qp import available_qp_solvers
+from contactqp.model import contact_forces_on_nodes, largest
+from contactqp.reference import reference
 from contactqp.result import Result, plain
 from contactqp.scene import Load, Scene
 from contactqp.solve import as_scene, solve
 
+ROUND_OFF = 1e-12  # relative: a force error (of the force) or a force (of F) below it is round-off
 SWEEP_PENALTIES = (1.0,) + tuple(10.0 ** k for k in range(5, 21))  # N/m: 1, 1e5, 1e6 … 1e20
 
 
@@ -31,14 +35,27 @@ def sweep_penalties(scene: Scene) -> tuple[float, ...]:
     return tuple(eps * scene.unit.metre for eps in SWEEP_PENALTIES)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Run:
-    """One row of a comparison: a Result, or the error that stopped the method."""
+    """One row of a comparison: a Result, or the error that stopped the method; with the
+    exact contact forces (N, one per contact row) where the comparison has them."""
 
     label: str
     contact: str
     result: Result | None
     error: str = ""
+    exact_force: np.ndarray | None = None
+
+    @property
+    def exact_error(self) -> float | None:
+        """The largest error of the contact force on any node against the exact reference
+        (N): max |λ − λ_exact| where each node has one contact row. Per node, since where
+        contacts close a loop only the force on each node is unique. None without a result
+        or a reference."""
+        if self.result is None or self.exact_force is None:
+            return None
+        return largest(contact_forces_on_nodes(self.result.layout,
+                                               self.result.contact_force - self.exact_force))
 
 
 def method_runs(scene: Scene | None = None) -> list[tuple[str, dict]]:
@@ -57,26 +74,50 @@ def method_runs(scene: Scene | None = None) -> list[tuple[str, dict]]:
     return runs
 
 
+NCP_LABELS = {"fischer-burmeister": "FB", "min": "min"}  # short enough for a table's row
+
+
 def run_label(method: str, options: dict) -> str:
-    """e.g. 'lagrange', 'penalty', 'penalty ε=1e+14', 'pgs ω=1.5', 'qp/osqp/OSQP'."""
+    """e.g. 'lagrange', 'penalty', 'penalty ε=1e+14', 'pgs ω=1.5', 'semismooth_newton FB'
+    (Fischer–Burmeister), 'qp/osqp/osqp'."""
     if method == "penalty" and "penalty" in options:
         return f"penalty ε={options['penalty']:.0e}"
     if method == "pgs" and "relaxation" in options:
         return f"pgs ω={options['relaxation']:g}"
+    if method == "semismooth_newton" and "ncp" in options:
+        return f"{method} {NCP_LABELS.get(options['ncp'], options['ncp'])}"
     return "/".join([method, *(str(v) for v in options.values() if v)])
 
 
-def compare(scene: Scene | None = None, contacts: tuple[str, ...] = CONTACT_KINDS) -> list[Run]:
-    """Solve ``scene`` by every method (and every installed QP solver) for each contact kind."""
+def exact_reference(scene: Scene) -> np.ndarray | None:
+    """The exact unilateral contact forces of ``scene`` (:func:`contactqp.reference.reference`,
+    N, one per contact row), or None for a scene beyond its reach (more than
+    ``MAX_EXACT_NODES`` nodes unless it is one bar with walls only)."""
+    try:
+        return reference(scene).contact_force
+    except SceneError:
+        return None
+
+
+def compare(scene: Scene | str | None = None,
+            contacts: tuple[str, ...] = CONTACT_KINDS) -> list[Run]:
+    """Solve ``scene`` (a Scene, a scene file's path, or None for the default scene) by every
+    method and every installed QP solver, for each contact kind; the inequality runs carry the
+    exact contact forces (:func:`exact_reference`) where there are some. A method that cannot
+    solve the scene is a Run with its error. :func:`contactqp.report.table` prints the runs."""
     scene = as_scene(scene)
+    exact = exact_reference(scene) if "inequality" in contacts else None
     rows = []
     for contact in contacts:
+        known = exact if contact == "inequality" else None  # the reference is unilateral
         for method, options in method_runs(scene):
             label = run_label(method, options)
             try:
-                rows.append(Run(label, contact, solve(scene, method, contact, **options)))
+                result = solve(scene, method, contact, **options)
             except ContactqpError as error:
-                rows.append(Run(label, contact, None, str(error)))
+                rows.append(Run(label, contact, None, str(error), known))
+                continue
+            rows.append(Run(label, contact, result, "", known))
     return rows
 
 
@@ -85,9 +126,11 @@ class PenaltySweep:
     """Penalty and augmented-Lagrangian solves over a range of ε against the Lagrange solution.
 
     ``force_error`` is the largest relative contact-force error against Lagrange (NaN where the
-    solve failed); ``augmented_error`` and ``augmented_iterations`` the same for the augmented
-    method at the same ε. ``best`` is the index of the penalty's smallest error: the sweep
-    converges up to it, and beyond it round-off takes over.
+    solve failed) and ``penetration`` the largest penetration; ``augmented_error`` and
+    ``augmented_iterations`` the same for the augmented method at the same ε (its
+    penetration, and whether it stopped at its update cap: :attr:`augmented_penetration`,
+    :attr:`augmented_capped`). ``best`` is the index of the penalty's smallest error: the
+    sweep converges up to it, and beyond it round-off takes over.
     """
 
     penalties: np.ndarray
@@ -100,43 +143,114 @@ class PenaltySweep:
     augmented_error: np.ndarray
     augmented_iterations: np.ndarray
 
+    @property
+    def augmented_penetration(self) -> np.ndarray:
+        """The augmented method's largest penetration at each ε (NaN where it failed)."""
+        return _largest_penetration(self.augmented_runs)
+
+    @property
+    def augmented_capped(self) -> np.ndarray:
+        """Where the augmented method stopped at its update cap (``max_iterations``) and
+        returned its last iterate (the solver's own claim of success is False)."""
+        return np.array([r.result is not None and not r.result.claimed_success
+                         for r in self.augmented_runs], dtype=bool)
+
+    @property
+    def carries_force(self) -> bool:
+        """Whether any contact carries force in the Lagrange answer (more than round-off,
+        :data:`ROUND_OFF`·F): without one there is nothing for ε to converge to."""
+        scale = self.reference.force_scale
+        return largest(self.reference.contact_force) > ROUND_OFF * scale
+
+    @property
+    def converged_up_to(self) -> float | None:
+        """The ε of the penalty's smallest force error, or None where there is nothing to
+        converge (no contact carries force, or no solve succeeded)."""
+        if not (self.carries_force and np.any(np.isfinite(self.force_error))):
+            return None
+        return float(self.penalties[self.best])
+
     def to_dict(self) -> dict:
-        """The JSON form of ``contactqp penalty-sweep --json``."""
-        def forces(runs: tuple[Run, ...], key: str) -> list:
+        """The JSON form of ``contactqp penalty-sweep --json``: per ε the penalty's and the
+        augmented method's contact forces, penetrations, force errors and verdicts (None
+        where a solve failed)."""
+        def of(runs: tuple[Run, ...], key: str) -> list:
             return [None if r.result is None else getattr(r.result, key) for r in runs]
+
+        def verified(runs: tuple[Run, ...]) -> list:
+            return [r.result is not None and r.result.verified for r in runs]
 
         return plain({
             "penalty": self.penalties, "units": self.reference.scene.units,
-            "contact_force": forces(self.runs, "contact_force"),
-            "penetration": forces(self.runs, "penetration"),
+            "contact_force": of(self.runs, "contact_force"),
+            "penetration": of(self.runs, "penetration"),
             "force_error": self.force_error,
-            "verified": [r.result is not None and r.result.verified for r in self.runs],
+            "verified": verified(self.runs),
+            "failed": [r.error or None for r in self.runs],
             "reference_contact_force": self.reference.contact_force,
-            "converged_up_to": self.penalties[self.best],
+            "converged_up_to": self.converged_up_to,
+            "augmented_contact_force": of(self.augmented_runs, "contact_force"),
+            "augmented_penetration": of(self.augmented_runs, "penetration"),
             "augmented_force_error": self.augmented_error,
             "augmented_iterations": self.augmented_iterations,
-            "augmented_verified": [r.result is not None and r.result.verified
-                                   for r in self.augmented_runs],
+            "augmented_capped": self.augmented_capped,
+            "augmented_verified": verified(self.augmented_runs),
+            "augmented_failed": [r.error or None for r in self.augmented_runs],
+            "summary": self.summary(),
         })
 
     def summary(self) -> str:
+        """Where the penalty converges and where round-off takes over; on a second line, where
+        the augmented method is verified and where it stops at its update cap."""
         if not np.any(np.isfinite(self.force_error)):
             return "no penalty solve succeeded"
-        if not np.any(self.reference.contact_force):
+        if not self.carries_force:
             return ("no contact carries a force here (every ε gives the free answer): nothing "
                     "to converge")
-        best = self.penalties[self.best]
+        return f"penalty: {self._penalty_summary()}\n{self._augmented_summary()}"
+
+    def _penalty_summary(self) -> str:
         unit = self.reference.scene.unit.stiffness
-        text = (f"converges up to ε = {best:.0e} {unit} (force error "
-                f"{self.force_error[self.best]:.1e})")
+        if np.nanmax(self.force_error) <= ROUND_OFF:  # exact throughout: nothing converges
+            return (f"every ε gives the Lagrange force (force error at most "
+                    f"{np.nanmax(self.force_error):.1e})")
+        error = self.force_error[self.best]
+        text = f"converges up to ε = {self.penalties[self.best]:.0e} {unit} (force error {error:.1e})"
         after = self.force_error[self.best + 1:]
-        if after.size:
-            worst = np.nanmax(after) if np.any(np.isfinite(after)) else np.nan
+        if not after.size:
+            return text + "; still converging at the largest ε"
+        worst = np.nanmax(after) if np.any(np.isfinite(after)) else np.nan
+        if worst > error:
             text += (f"; beyond it round-off takes over (error grows to {worst:.1e} by "
                      f"ε = {self.penalties[-1]:.0e} {unit})")
-        else:
-            text += "; still converging at the largest ε"
         return text
+
+    def _augmented_summary(self) -> str:
+        verified = np.array([r.result is not None and r.result.verified
+                             for r in self.augmented_runs], dtype=bool)
+        unit = self.reference.scene.unit.stiffness
+        text = "augmented Lagrangian: "
+        if verified.all():
+            text += "verified at every ε"
+        elif not verified.any():
+            text += "verified at no ε"
+        else:
+            i = int(np.flatnonzero(verified)[0])
+            text += (f"verified from ε = {self.penalties[i]:.0e} {unit} "
+                     f"({self.augmented_iterations[i]} updates there)")
+            if not verified[i:].all():
+                text += " but not at every ε above it"
+        capped = self.augmented_capped
+        if capped.any():
+            cap = int(self.augmented_iterations[capped].max())
+            text += (f"; stopped at its cap of {cap} updates at {int(capped.sum())} ε "
+                     f"(up to {self.penalties[capped].max():.0e} {unit})")
+        return text
+
+
+def _largest_penetration(runs: tuple[Run, ...]) -> np.ndarray:
+    return np.array([np.nan if r.result is None else float(r.result.penetration.max(initial=0.0))
+                     for r in runs])
 
 
 def _sweep_runs(scene: Scene, method: str, penalties: tuple[float, ...], contact: str,
@@ -168,8 +282,7 @@ def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | Non
     reference = solve(scene, "lagrange", contact)
     runs, errors = _sweep_runs(scene, "penalty", penalties, contact, reference)
     augmented, augmented_errors = _sweep_runs(scene, "augmented", penalties, contact, reference)
-    depths = np.array([np.nan if r.result is None else float(r.result.penetration.max(initial=0.0))
-                       for r in runs])
+    depths = _largest_penetration(runs)
     iterations = np.array([0 if r.result is None else r.result.iterations for r in augmented])
     best = int(np.nanargmin(errors)) if np.any(np.isfinite(errors)) else 0
     return PenaltySweep(np.array(penalties, dtype=float), runs, reference, errors, depths, best,

@@ -1,0 +1,154 @@
+"""The comparison table: runs of one scene (:func:`contactqp.compare`), one row each, in the
+scene's units; numbered notes under it, each written once; every contact on request.
+
+>>> import contactqp
+>>> print(contactqp.table(contactqp.compare()))      # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from contactqp import formatting
+from contactqp.result import Result
+from contactqp.studies import Run
+
+VERIFIED_WORDS = {True: "yes", False: "NO"}
+PULLS = "non-physical: a wall pulls"  # how the check's message says it (contactqp.check)
+PULLS_KEY = ("(pulls): a contact pulls, which a rigid wall cannot (equality contact holds each "
+             "node on its wall); the detail table (--detail) lists every contact's force")
+
+
+def _largest_residual(result: Result) -> float:
+    """The largest of the residuals ``verified`` is decided on (not the natural map)."""
+    return max(v for name, v in result.residuals.items()
+               if v is not None and name != "natural_map")
+
+
+def _verdict(run: Run) -> str:
+    r = run.result
+    if r is None:
+        return "failed"
+    return VERIFIED_WORDS[r.verified] + ("" if r.physical else " (pulls)")
+
+
+def _note(run: Run) -> str:
+    """What the row alone does not say: why it failed, or what its check found (the pulling
+    contacts are in the row's verdict, and each force in the detail)."""
+    r = run.result
+    if r is None:
+        return f"failed: {run.error}"
+    found = r.message.split(PULLS)[0].rstrip("; ")
+    if not found:
+        return ""
+    claim = (f" (yet the solver reported {r.status!r})"
+             if r.claimed_success and not r.verified else "")
+    return f"{found}{claim}"
+
+
+def _numbered(runs: list[Run]) -> tuple[list[str], list[str]]:
+    """(each run's note mark, '' or '[k]'; the notes, each text once, in order of first use)."""
+    texts: list[str] = []
+    marks = []
+    for run in runs:
+        text = _note(run)
+        if text and text not in texts:
+            texts.append(text)
+        marks.append(f"[{texts.index(text) + 1}]" if text else "")
+    return marks, texts
+
+
+def _scene_of(runs: list[Run]):
+    return next((run.result.scene for run in runs if run.result is not None), None)
+
+
+def _force_scale(runs: list[Run]) -> float:
+    return max((run.result.force_scale for run in runs if run.result is not None), default=1.0)
+
+
+def table(runs: list[Run]) -> str:
+    """The comparison table of ``runs``: one row per run (method, contact kind), in the scene's
+    units, then its notes.
+
+    Columns: the contact force (the one contact's, or the largest and (k/n) how many of the n
+    contacts carry force: more than the check's 1e-5·F); its error against the exact reference
+    (the largest on any node, N; where the runs carry one, :attr:`Run.exact_error`); the
+    largest penetration; the largest residual of the check; verified (``(pulls)``: a wall or a
+    bar contact pulls); the time of the whole solve; the row's note. Each note (a failed
+    check's reason, a method that could not solve the scene) is written once, however many
+    rows share it; the stress beyond yield once, from the first verified answer.
+    :func:`detail_table` lists every contact.
+    """
+    scene = _scene_of(runs)
+    unit = scene.unit if scene is not None else None
+    force_unit, length_unit = (unit.force, unit.length) if unit else ("", "")
+    scale = _force_scale(runs)
+    exact = any(run.exact_force is not None for run in runs)
+    marks, texts = _numbered(runs)
+    header = [("method", ""), ("contact", ""), ("contact force", f"({force_unit})")]
+    header += [("error", f"({force_unit})")] if exact else []
+    header += [("penetration", f"({length_unit})"), ("residual", ""), ("verified", ""),
+               ("time", "(ms)"), ("note", "")]
+    rows = []
+    for run, mark in zip(runs, marks):
+        r = run.result
+        cells = [run.label, run.contact]
+        if r is None:
+            cells += [""] * (len(header) - 5) + ["failed", "", mark]
+        else:
+            error = run.exact_error
+            cells += [formatting.forces_summary(r.contact_force, scale)]
+            cells += [("-" if error is None else formatting.number(error, ".1e"))] if exact else []
+            cells += [formatting.number(r.penetration.max(), ".3g") if r.penetration.size else "-",
+                      formatting.number(_largest_residual(r), ".1e"), _verdict(run),
+                      f"{1e3 * r.time:.2f}", mark]
+        rows.append(cells)
+    lines = formatting.text_table(header, rows).splitlines()
+    if any(run.result is not None and not run.result.physical for run in runs):
+        lines.append(PULLS_KEY)
+    lines += [f"[{k}] {text}" for k, text in enumerate(texts, 1)]
+    lines += [f"note: {line}" for line in _scene_notes(runs)]
+    return formatting.wrap("\n".join(lines))
+
+
+def _scene_notes(runs: list[Run]) -> list[str]:
+    """The stress beyond yield, once, from the first verified answer."""
+    first = next((run.result for run in runs if run.result is not None and run.result.verified),
+                 None)
+    if first is None:
+        return []
+    return [f"{first.label}: {w}" for w in first.warnings if w.startswith("stress")]
+
+
+def notes(runs: list[Run]) -> list[str]:
+    """The notes :func:`table` prints under its rows, each once: why a run failed or what its
+    check found, then the stress beyond yield."""
+    return [*_numbered(runs)[1], *_scene_notes(runs)]
+
+
+def detail_table(runs: list[Run]) -> str:
+    """Every contact of every run: its force, the exact force where the runs carry the exact
+    reference, and its penetration; then every support's reaction; in the scene's units."""
+    scene = _scene_of(runs)
+    if scene is None:
+        return "no run produced an answer"
+    unit, scale = scene.unit, _force_scale(runs)
+    names = formatting.row_names(scene)
+    header = [("method", ""), ("contact", ""), ("where", ""), ("force", f"({unit.force})"),
+              ("exact", f"({unit.force})"), ("penetration", f"({unit.length})")]
+    rows = []
+    for run in runs:
+        r = run.result
+        if r is None:
+            continue
+        exact = run.exact_force if run.exact_force is not None else np.full(len(names), np.nan)
+        for name, force, known, depth in zip(names, r.contact_force, exact, r.penetration):
+            rows.append([run.label, run.contact, name, formatting.force(force, scale),
+                         "" if np.isnan(known) else formatting.force(known, scale),
+                         formatting.number(depth, ".3g")])
+        rows += [[run.label, run.contact, f"support[{i}]", formatting.force(reaction, scale),
+                  "", ""] for i, reaction in enumerate(r.reactions)]
+    return formatting.text_table(header, rows)
+
+
+__all__ = ["detail_table", "notes", "table"]
