@@ -11,6 +11,7 @@ import json
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -20,6 +21,8 @@ from closed_forms import DEFAULT_F as F
 from closed_forms import DEFAULT_GAP as GAP
 from closed_forms import DEFAULT_SCENE
 from contactqp.cli import main
+
+EXAMPLES = sorted((Path(__file__).parent.parent / "examples").glob("*.toml"))
 
 DIAMETERS_MID = [0.0375, 0.0325, 0.0275, 0.0225]  # m, mid-length of 40 → 20 mm over 4 elements
 
@@ -90,6 +93,83 @@ def test_main_job_prints_every_method_and_writes_charts(capsys, tmp_path):
         path = tmp_path / name
         assert f"chart: {path}" in out
         assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert max(len(line) for line in out.splitlines()) <= 120  # a compact table
+
+
+def test_compare_of_a_scene_file_draws_that_scene_and_says_what_it_leaves(capsys, tmp_path):
+    """The mesh convergence and Nitsche's sweep study the default scene: a scene file's
+    comparison draws its own bar and penalty sweep, not them (they were the same files for
+    every scene), and says so."""
+    scene = next(path for path in EXAMPLES if path.name == "two_bars.toml")
+    code, out, _ = run(capsys, "compare", str(scene), "--out", str(tmp_path))
+    assert code == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bar.png", "penalty_sweep.png"]
+    assert "study the default scene" in out
+    assert "two bars" in out.splitlines()[0]
+
+
+def test_compare_detail_lists_every_contact(capsys):
+    """--detail: a line per run and contact row (the two-spring closed form, 6000 N, as the
+    exact force), and per support."""
+    scene = next(path for path in EXAMPLES if path.name == "two_bars.toml")
+    code, out, _ = run(capsys, "compare", str(scene), "--no-charts", "--detail")
+    assert code == 0
+    lagrange = [line.split() for line in out.splitlines()
+                if line.startswith("lagrange ") and "inequality" in line and "[" in line]
+    contact = next(row for row in lagrange if row[2] == "contact[0]")
+    assert float(contact[3]) == pytest.approx(6000.0, rel=1e-12) and contact[4] == "6000"
+    assert [row[2] for row in lagrange if row[2].startswith("support")] == ["support[0]",
+                                                                           "support[1]"]
+    code, plain, _ = run(capsys, "compare", str(scene), "--no-charts")
+    assert "contact[0]" not in plain
+
+
+@pytest.mark.parametrize(("argv", "written"), [
+    (["--out", "{out}", "compare", "--no-charts"], []),
+    (["--out", "{out}", "--no-charts"], []),  # the main job
+    (["penalty-sweep", "--out", "{out}", "--no-charts"], []),
+    (["penalty-sweep", "--out", "{out}"], ["penalty_sweep.png"]),
+    (["penalty-sweep", "--out", "{out}", "--json"], []),  # JSON instead of table and chart
+    (["curve", "--steps", "3", "--out", "{out}", "--no-charts"], []),
+    (["curve", "--steps", "3", "--out", "{out}"], ["load_path.png"]),
+    (["solve"], []),  # solve draws only when asked: nothing, not even in the cwd
+    (["solve", "--out", "{out}"], ["bar.png"]),
+    (["--no-charts", "solve", "--out", "{out}"], []),
+])
+def test_every_chart_option_does_what_it_says(capsys, tmp_path, monkeypatch, argv, written):
+    """--out (before or after the command), --no-charts and --json, run in an empty folder:
+    exactly the charts asked for are written, and only into --out."""
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "charts"
+    assert main([a.replace("{out}", str(out)) for a in argv]) == 0
+    capsys.readouterr()
+    found = sorted(p.name for p in out.iterdir()) if out.exists() else []
+    assert found == written
+    assert [p.name for p in tmp_path.iterdir() if p != out] == []  # nothing in the cwd
+
+
+def test_out_given_before_the_command_is_used(capsys, tmp_path):
+    """`contactqp --out DIR curve` wrote into contactqp-out/: the command's own default hid
+    the value given before it."""
+    assert main(["--out", str(tmp_path / "before"), "curve", "--steps", "3"]) == 0
+    assert main(["curve", "--steps", "3", "--out", str(tmp_path / "after")]) == 0
+    capsys.readouterr()
+    assert (tmp_path / "before" / "load_path.png").exists()
+    assert (tmp_path / "after" / "load_path.png").exists()
+
+
+def test_solve_detail_and_json_with_out(capsys, tmp_path):
+    """solve --detail lists the wall's force and the support's reaction (the closed form);
+    solve --json --out keeps stdout JSON and names the chart on stderr."""
+    code, out, _ = run(capsys, "solve", "--detail")
+    assert code == 0
+    wall = next(line.split() for line in out.splitlines() if " wall[0] " in line)
+    assert float(wall[3]) == pytest.approx(closed_form_force(), rel=1e-9)  # 10 digits
+    support = next(line.split() for line in out.splitlines() if " support[0] " in line)
+    assert float(support[3]) == pytest.approx(-(F - closed_form_force()), rel=1e-9)
+    code, out, err = run(capsys, "solve", "--json", "--out", str(tmp_path))
+    assert code == 0 and json.loads(out)["verified"] is True
+    assert f"chart: {tmp_path / 'bar.png'}" in err and (tmp_path / "bar.png").exists()
 
 
 def test_solve_json_has_the_contract_keys_and_the_closed_form(capsys):
@@ -146,6 +226,18 @@ def test_solve_equality_on_an_open_gap_reports_a_pulling_wall(capsys, tmp_path):
     assert data["contact_force"] == [0.0]
     # the free tip moves F L/(EA) = 1000/(210e6) m, so the gap stays open by g − that
     assert data["penetration"][0] == pytest.approx(1000.0 / 210e6 - 1e-3, rel=1e-12)
+
+
+def test_penalty_sweep_table_has_the_augmented_method(capsys):
+    """Each ε's row has the augmented method's force, error, updates and verdict; at ε = 1 N/m
+    it stops at its cap of 100 updates (each shrinks the error by 1/(1 + ε f) ≈ 1 − 1e-8)."""
+    code, out, _ = run(capsys, "penalty-sweep", "--no-charts")
+    assert code == 0
+    header = out.splitlines()[1]
+    assert "augmented force" in header and "updates" in header
+    first = out.splitlines()[4].split()
+    assert first[0] == "1e+00" and first[-3:] == ["100", "(cap)", "NO"]
+    assert "augmented Lagrangian: verified from ε = " in out
 
 
 def test_penalty_sweep_json_converges_then_loses_digits(capsys):
@@ -239,7 +331,7 @@ def test_solve_exits_0_when_verified(capsys):
 
 
 def test_studies_exit_0_with_failing_rows_and_say_so(capsys):
-    assert main(["penalty-sweep"]) == 0  # ε = 1 fails its check on purpose
+    assert main(["penalty-sweep", "--no-charts"]) == 0  # ε = 1 fails its check on purpose
     out, _ = capsys.readouterr()
     assert "NO" in out
     with pytest.raises(SystemExit):
@@ -288,11 +380,12 @@ def test_what_is_printed_and_written_is_in_the_scenes_units(capsys, tmp_path):
     assert data["penetration"][0] == pytest.approx(
         contactqp.solve(DEFAULT_SCENE).penetration[0] * 1e3, abs=1e-12)
     assert main(["solve", str(path)]) == 0
-    out = capsys.readouterr().out
-    assert "penetration (mm)" in out and "contact force (N)" in out
+    names, units = capsys.readouterr().out.splitlines()[:2]
+    # the units line sits under the names: contact force in N, penetration in mm
+    assert units[names.index("contact force"):].split()[:2] == ["(N)", "(mm)"]
     assert main(["penalty-sweep", str(path), "--no-charts"]) == 0
     out = capsys.readouterr().out
-    assert "ε (N/mm)" in out and "N/mm (force error" in out
+    assert "(N/mm)" in out.splitlines()[2] and "N/mm (force error" in out
 
 
 def test_curve_cli_json(capsys):
@@ -328,3 +421,37 @@ def test_the_complementarity_options_reach_their_methods(capsys):
     assert code == 0 and json.loads(out)["info"]["ncp"] == "fischer-burmeister"
     code, _, err = run(capsys, "solve", "--method", "pgs", "--relaxation", "2.5")
     assert code == 2 and "relaxation must be in (0, 2)" in err
+
+
+@pytest.mark.parametrize(("argv", "solver", "options"), [
+    (["--method", "qp", "--backend", "osqp"], "osqp", {"backend": "osqp"}),
+    (["--method", "qp", "--backend", "qpsolvers", "--solver", "daqp"], "qpsolvers/daqp",
+     {"backend": "qpsolvers", "solver": "daqp"}),
+    (["--method", "qp", "--accuracy", "high"], "clarabel", {"accuracy": "high"}),
+    (["--method", "qp", "--scale", "off"], "clarabel", {"scale": False}),
+    (["--method", "augmented", "--tolerance", "1e-6"], "augmented", {"tolerance": 1e-6}),
+])
+def test_the_solver_options_reach_the_result(capsys, argv, solver, options):
+    """Each QP and tolerance option of solve arrives in the Result (its solver and options)."""
+    code, out, _ = run(capsys, "solve", *argv, "--json")
+    data = json.loads(out)
+    assert code == 0 and data["solver"] == solver and data["options"] == options
+
+
+def test_verbose_lets_the_solver_print(capfd):
+    """--verbose: OSQP's banner on stdout (the solver's own C code); without it, silence."""
+    assert main(["solve", "--method", "qp", "--backend", "osqp", "--verbose", "--json"]) == 0
+    assert "OSQP" in capfd.readouterr().out
+    assert main(["solve", "--method", "qp", "--backend", "osqp", "--json"]) == 0
+    assert "OSQP" not in capfd.readouterr().out.replace('"osqp"', "")
+
+
+def test_penalty_sweep_contact_option(capsys):
+    """--contact equality: the sweep of the textbook form (the same force on the default
+    scene, where the wall pushes: the closed form λ)."""
+    code, out, _ = run(capsys, "penalty-sweep", "--contact", "equality", "--json")
+    assert code == 0
+    assert json.loads(out)["reference_contact_force"][0] == pytest.approx(closed_form_force(),
+                                                                       rel=1e-12)
+    code, out, _ = run(capsys, "penalty-sweep", "--contact", "equality", "--no-charts")
+    assert "equality contact" in out.splitlines()[0]

@@ -16,13 +16,12 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from contactqp import __version__
+from contactqp import __version__, formatting
 from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
+from contactqp.report import detail_table, table
 from contactqp.result import Result
-from contactqp.scene import Scene
+from contactqp.scene import Scene, Units
 from contactqp.solve import as_scene, solve
 from contactqp.studies import (
     PenaltySweep,
@@ -49,66 +48,36 @@ def _scene(path: str | None) -> Scene:
     return as_scene(path)
 
 
-def _values(values: np.ndarray, digits: int) -> str:
-    return ", ".join(f"{v:.{digits}g}" for v in values) if len(values) else "-"
+def _out(args: argparse.Namespace) -> Path:
+    """The folder for charts: --out, given before or after the command, or DEFAULT_OUT."""
+    return Path(getattr(args, "out", None) or DEFAULT_OUT)
 
 
-def _largest_residual(result: Result) -> float:
-    """The largest of the residuals ``verified`` is decided on (not the natural map)."""
-    return max(v for name, v in result.residuals.items()
-               if v is not None and name != "natural_map")
+def _charts_wanted(args: argparse.Namespace) -> bool:
+    return not getattr(args, "no_charts", False)
 
 
-def table(runs: list[Run]) -> str:
-    """The comparison table: one row per method and contact kind, in the scene's units."""
-    scene = next((run.result.scene for run in runs if run.result is not None), None)
-    unit = (scene or as_scene(None)).unit
-    header = ("method", "contact", f"contact force ({unit.force})",
-              f"penetration ({unit.length})", f"support reaction ({unit.force})",
-              "residual", "verified", "time (ms)")
-    rows = []
-    for run in runs:
-        r = run.result
-        if r is None:
-            rows.append((run.label, run.contact, f"failed: {run.error}", "", "", "", "no", ""))
-            continue
-        verified = "yes" if r.verified else "NO"
-        if not r.physical:
-            verified += " (pulls)"
-        rows.append((run.label, r.contact, _values(r.contact_force, 10), _values(r.penetration, 3),
-                     _values(r.reactions, 10), f"{_largest_residual(r):.1e}", verified,
-                     f"{1e3 * r.time:.2f}"))
-    widths = [max(len(str(row[i])) for row in (header, *rows)) for i in range(len(header))]
-    lines = ["  ".join(str(c).ljust(w) for c, w in zip(row, widths)).rstrip()
-             for row in (header, *rows)]
-    lines.insert(1, "  ".join("-" * w for w in widths))
-    return "\n".join(lines)
+def _print_runs(runs: list[Run], detail: bool) -> None:
+    print(table(runs))
+    if detail:
+        print()
+        print(detail_table(runs))
 
 
-def notes(runs: list[Run]) -> list[str]:
-    """What the table alone does not say: failed checks, pulling walls, stress past yield."""
-    out: list[str] = []
-    for run in runs:
-        r = run.result
-        if r is not None and r.message:
-            claim = (f" (yet the solver reported {r.status!r})"
-                     if r.claimed_success and not r.verified else "")
-            out.append(f"{run.label} ({run.contact}): {r.message}{claim}")
-    reference = next((run.result for run in runs if run.result is not None and run.result.verified),
-                     None)  # one stress note, from the first verified answer
-    if reference is not None:
-        out.extend(f"{reference.label}: {w}" for w in reference.warnings if w.startswith("stress"))
-    return out
-
-
-def _write_charts(result: Result, sweep: PenaltySweep, out: Path) -> list[str]:
+def _write_charts(result: Result, sweep: PenaltySweep, out: Path,
+                  default_scene: bool) -> list[str]:
+    """The scene's bar and penalty sweep; for the default scene also Nitsche's sweep and the
+    mesh convergence, which are studies of the default scene alone."""
     from contactqp import plot  # matplotlib only when charts are asked for
 
     out.mkdir(parents=True, exist_ok=True)
-    return [plot.save(plot.plot_bar(result), out / "bar.png"),
-            plot.save(plot.plot_penalty_sweep(sweep), out / "penalty_sweep.png"),
-            plot.save(plot.plot_nitsche_sweep(nitsche_sweep()), out / "nitsche_sweep.png"),
-            plot.save(plot.plot_mesh_convergence(mesh_convergence()), out / "mesh_convergence.png")]
+    paths = [plot.save(plot.plot_bar(result), out / "bar.png"),
+             plot.save(plot.plot_penalty_sweep(sweep), out / "penalty_sweep.png")]
+    if default_scene:
+        paths += [plot.save(plot.plot_nitsche_sweep(nitsche_sweep()), out / "nitsche_sweep.png"),
+                  plot.save(plot.plot_mesh_convergence(mesh_convergence()),
+                            out / "mesh_convergence.png")]
+    return paths
 
 
 def command_compare(args: argparse.Namespace) -> int:
@@ -118,14 +87,15 @@ def command_compare(args: argparse.Namespace) -> int:
     contacts = f", {len(scene.contacts)} bar contact(s)" if scene.contacts else ""
     print(f"scene: {scene.name} ({bars}{scene.n_elements} elements, {len(scene.walls)} wall(s)"
           f"{contacts})")
-    print(table(runs))
-    for line in notes(runs):
-        print(f"note: {line}")
+    _print_runs(runs, getattr(args, "detail", False))
     answers = [r.result for r in runs if r.result is not None]
     shown = next((r for r in answers if r.verified and r.physical), answers[0] if answers else None)
-    if not args.no_charts and shown is not None:
-        for path in _write_charts(shown, penalty_sweep(scene), Path(args.out)):
+    if _charts_wanted(args) and shown is not None:
+        for path in _write_charts(shown, penalty_sweep(scene), _out(args), args.scene is None):
             print(f"chart: {path}")
+        if args.scene is not None:
+            print("(Nitsche's γ₀ sweep and the mesh convergence study the default scene: "
+                  "`contactqp compare` without a scene draws them)")
     return OK
 
 
@@ -147,13 +117,49 @@ def command_solve(args: argparse.Namespace) -> int:
     if args.json:
         print(result.to_json())
     else:
-        print(table([Run(result.label, result.contact, result)]))
-        for line in notes([Run(result.label, result.contact, result)]):
-            print(f"note: {line}")
+        _print_runs([Run(result.label, result.contact, result)], args.detail)
+    if getattr(args, "out", None) and _charts_wanted(args):  # solve draws only when asked
+        from contactqp import plot  # matplotlib only when a chart is asked for
+
+        _out(args).mkdir(parents=True, exist_ok=True)
+        path = plot.save(plot.plot_bar(result), _out(args) / "bar.png")
+        print(f"chart: {path}", file=sys.stderr if args.json else sys.stdout)
     if result.verified and result.physical:
         return OK
     print(f"contactqp: the answer is not verified: {result.message}", file=sys.stderr)
     return NOT_VERIFIED
+
+
+def _sweep_header(unit: Units) -> list[tuple[str, str]]:
+    return [("ε", f"({unit.stiffness})"), ("penalty force", f"({unit.force})"),
+            ("penetration", f"({unit.length})"), ("rel. error", ""), ("verified", ""),
+            ("augmented force", f"({unit.force})"), ("rel. error", ""), ("updates", ""),
+            ("verified", "")]
+
+
+def _sweep_row(eps: float, sweep: PenaltySweep, i: int) -> list[str]:
+    """Row ``i`` of the penalty-sweep table: the penalty's contact force, largest penetration,
+    relative force error against Lagrange and verdict; the augmented method's force, error,
+    updates (``(cap)``: it stopped at its cap and returned its last iterate) and verdict."""
+    scale = sweep.reference.force_scale
+
+    def cells(run: Run, error: float) -> list[str]:  # force, error, verdict
+        r = run.result
+        if r is None:
+            return ["failed", "", ""]
+        return [formatting.forces_summary(r.contact_force, scale),
+                formatting.number(error, ".2e"), "yes" if r.verified else "NO"]
+
+    penalty, augmented = sweep.runs[i], sweep.augmented_runs[i]
+    depth = ("" if penalty.result is None
+             else formatting.number(penalty.result.penetration.max(initial=0.0), ".4g"))
+    updates = ("" if augmented.result is None else f"{sweep.augmented_iterations[i]}"
+               + (" (cap)" if sweep.augmented_capped[i] else ""))
+    left = cells(penalty, sweep.force_error[i])
+    right = cells(augmented, sweep.augmented_error[i])
+    left.insert(1, depth)
+    right.insert(2, updates)
+    return [f"{eps:.0e}", *left, *right]
 
 
 def command_penalty_sweep(args: argparse.Namespace) -> int:
@@ -162,34 +168,27 @@ def command_penalty_sweep(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(sweep.to_dict(), indent=2, allow_nan=False))
         return OK
-    unit = scene.unit
+    unit, scale = scene.unit, sweep.reference.force_scale
     print(f"penalty sweep, {scene.name}, {args.contact} contact; Lagrange contact force "
-          f"{_values(sweep.reference.contact_force, 10)} {unit.force}")
-    print(f"{'ε (' + unit.stiffness + ')':>9}  {'contact force (' + unit.force + ')':>20}  "
-          f"{'penetration (' + unit.length + ')':>16}  {'force error':>11}  verified  "
-          f"{'augmented':>11}  updates")
-    rows = zip(sweep.penalties, sweep.runs, sweep.force_error, sweep.augmented_error,
-               sweep.augmented_iterations)
-    for eps, run, error, augmented, updates in rows:
+          f"{formatting.forces_summary(sweep.reference.contact_force, scale)} {unit.force}")
+    print(formatting.text_table(_sweep_header(unit), [
+        _sweep_row(eps, sweep, i) for i, eps in enumerate(sweep.penalties)]))
+    for run in (*sweep.runs, *sweep.augmented_runs):
         if run.result is None:
-            print(f"{eps:9.0e}  failed: {run.error}")
-            continue
-        r = run.result
-        print(f"{eps:9.0e}  {_values(r.contact_force, 10):>20}  {_values(r.penetration, 4):>16}  "
-              f"{error:11.2e}  {'yes' if r.verified else 'NO':<8}  {augmented:11.2e}  {updates}")
-    print(sweep.summary())
+            print(f"{run.label}: failed: {run.error}")
+    print(formatting.wrap(sweep.summary()))
     _chart(args, "plot_penalty_sweep", "penalty_sweep.png", sweep)
     return OK
 
 
 def _chart(args: argparse.Namespace, function: str, name: str, *data: Any) -> None:
-    """Draw ``plot.<function>(*data)`` into ``args.out``/``name`` unless --no-charts."""
-    if args.no_charts:
+    """Draw ``plot.<function>(*data)`` into the --out folder as ``name`` unless --no-charts."""
+    if not _charts_wanted(args):
         return
     from contactqp import plot  # matplotlib only when charts are asked for
 
-    Path(args.out).mkdir(parents=True, exist_ok=True)
-    print(f"chart: {plot.save(getattr(plot, function)(*data), Path(args.out) / name)}")
+    _out(args).mkdir(parents=True, exist_ok=True)
+    print(f"chart: {plot.save(getattr(plot, function)(*data), _out(args) / name)}")
 
 
 def command_curve(args: argparse.Namespace) -> int:
@@ -239,6 +238,18 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"contactqp: error: {message} (see contactqp --help)\n")
 
 
+OUT_HELP = f"folder the charts are written to (default {DEFAULT_OUT})"
+NO_CHARTS_HELP = "write no chart"
+DETAIL_HELP = "also list every contact's force, exact force and penetration, and every reaction"
+
+
+def _chart_options(parser: argparse.ArgumentParser, *, default: Any) -> None:
+    """--out and --no-charts, before the command or after it: a command's own default is
+    SUPPRESS, so that it does not hide the value given before the command."""
+    parser.add_argument("--out", default=default, help=OUT_HELP)
+    parser.add_argument("--no-charts", action="store_true", default=default, help=NO_CHARTS_HELP)
+
+
 def parser() -> argparse.ArgumentParser:
     top = _Parser(prog="contactqp", description="Contact of elastic bars by Lagrange "
                   "multipliers, penalty and QP solvers. With no command: every method on the "
@@ -246,8 +257,7 @@ def parser() -> argparse.ArgumentParser:
                   epilog="exit status: " + "; ".join(f"{code}: {text}"
                                                      for code, text in EXIT_CODES.items()))
     top.add_argument("--version", action="version", version=f"contactqp {__version__}")
-    top.add_argument("--out", default=DEFAULT_OUT, help="folder for charts (default %(default)s)")
-    top.add_argument("--no-charts", action="store_true", help="write no PNG files")
+    _chart_options(top, default=None)
     top.set_defaults(handler=command_compare, scene=None)
     commands = top.add_subparsers(dest="command", parser_class=_Parser)
 
@@ -255,25 +265,31 @@ def parser() -> argparse.ArgumentParser:
                       epilog: str | None = None) -> argparse.ArgumentParser:
         sub = commands.add_parser(name, help=help_text, description=help_text, epilog=epilog)
         sub.add_argument("scene", nargs="?", help="scene TOML file (default: the default scene)")
-        sub.add_argument("--out", default=DEFAULT_OUT, help="folder for charts")
-        sub.add_argument("--no-charts", action="store_true", help="write no PNG files")
         sub.set_defaults(handler=handler)
         return sub
 
-    scene_command("compare", command_compare, "every method on a scene, one table",
-                  STUDY_EXIT)
+    compare_parser = scene_command(
+        "compare", command_compare, "every method on a scene, one table; charts of the scene "
+        "(with no scene, also Nitsche's γ₀ sweep and the mesh convergence of the default scene)",
+        STUDY_EXIT)
+    _chart_options(compare_parser, default=argparse.SUPPRESS)
+    compare_parser.add_argument("--detail", action="store_true", help=DETAIL_HELP)
     solve_parser = scene_command(
         "solve", command_solve, "solve a scene by one method",
         "exit status 0 when the answer is verified and physical, 1 when it fails its check or "
         "a wall pulls (the reason on stderr), 2 for bad input")
+    solve_parser.add_argument("--out", default=argparse.SUPPRESS,
+                              help="draw the deformed bar into this folder (bar.png); by "
+                                   "default solve writes no file")
+    solve_parser.add_argument("--detail", action="store_true", help=DETAIL_HELP)
     solve_parser.add_argument("--method", default="lagrange", choices=list(METHODS))
     solve_parser.add_argument("--contact", default="inequality", choices=CONTACT_KINDS)
     solve_parser.add_argument("--formulation", default="auto", choices=("auto", *FORMULATIONS),
                               help="full, condensed (contact nodes only) or strain (lagrange, qp)")
     solve_parser.add_argument("--penalty", type=float,
-                              help="penalty ε (force per length in the scene's units; default "
-                                   "1e6 x the stiffness the walls see), methods penalty and "
-                                   "augmented; the textbook's is 1e14 (N/m)")
+                              help="penalty ε (force per length in the scene's units), methods "
+                                   "penalty (default 1e6 x the stiffness the walls see; the "
+                                   "textbook's is 1e14 N/m) and augmented (default 100 x it)")
     solve_parser.add_argument("--relaxation", type=float,
                               help="ω of projected SOR, method pgs (default 1: Gauss–Seidel)")
     solve_parser.add_argument("--ncp", choices=("min", "fischer-burmeister"),
@@ -293,14 +309,18 @@ def parser() -> argparse.ArgumentParser:
     sweep_parser = scene_command("penalty-sweep", command_penalty_sweep,
                                  "penetration and contact force for ε = 1, 1e5, 1e6 … 1e20 N/m",
                                  STUDY_EXIT)
+    _chart_options(sweep_parser, default=argparse.SUPPRESS)
     sweep_parser.add_argument("--contact", default="inequality", choices=CONTACT_KINDS)
-    sweep_parser.add_argument("--json", action="store_true", help="print the sweep as JSON")
+    sweep_parser.add_argument("--json", action="store_true",
+                              help="print the sweep as JSON (instead of the table and the chart)")
     curve_parser = scene_command("curve", command_curve,
                                  "force-displacement curve: the loads stepped from 0 to 1",
                                  STUDY_EXIT)
+    _chart_options(curve_parser, default=argparse.SUPPRESS)
     curve_parser.add_argument("--steps", type=int, default=21,
                               help="load factors from 0 to 1, both included (default %(default)s)")
-    curve_parser.add_argument("--json", action="store_true", help="print the curves as JSON")
+    curve_parser.add_argument("--json", action="store_true",
+                              help="print the curves as JSON (instead of the table and the chart)")
     commands.add_parser("solvers", help="installed QP backends and solvers, and how to add more"
                         ).set_defaults(handler=command_solvers)
     return top
