@@ -40,28 +40,64 @@ AUTO_CONDENSE_NODES = 512  # ... and at least this many free nodes (below, conde
 
 def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrange",
           contact: str = "inequality", formulation: str = "auto", **options: Any) -> Result:
-    """Solve a scene by ``method`` with ``contact`` "inequality" (unilateral, the default) or
-    "equality" (the textbook form), and return a checked :class:`~contactqp.result.Result`.
+    """Solve a scene by one method and return the checked Result.
 
-    ``scene``: a Scene, the path of a scene file (read by :func:`contactqp.load_scene`), or
-    None for the default scene.
+    Parameters
+    ----------
+    scene : Scene, str, os.PathLike or None
+        The scene, the path of a scene file (read by :func:`contactqp.load_scene`), or None
+        for the default scene (:func:`contactqp.default_scene`).
+    method : str
+        One of :data:`contactqp.METHODS`: "lagrange", "penalty", "augmented", "qp", "lemke",
+        "pgs", "semismooth_newton" or "nitsche".
+    contact : str
+        "inequality" (unilateral: a wall may only push; the default) or "equality" (the
+        textbook form: each contact node sits on its wall).
+    formulation : str
+        "auto" (the default: "condensed" where the method takes it, the scene has at most
+        AUTO_CONDENSE contact nodes and at least AUTO_CONDENSE_NODES free nodes, and the
+        method is not Lagrange with its hull active set, else "full"; the same answer, and the
+        Result's options say which ran), "full" (every free node an unknown), "condensed" (the
+        method sees only the nodes that carry contacts, a chain again, and every displacement
+        is recovered by statics: :func:`contactqp.model.condense`) or "strain" (lagrange and
+        qp only: the element elongations are unknowns too, tied to the displacements by
+        equality rows whose multipliers are the element forces:
+        :func:`contactqp.model.elongation_rows`).
+    **options
+        The method's options (:data:`contactqp.methods.METHODS` names each), in the scene's
+        units. "lagrange": ``max_iterations``, ``active_set`` ("hull" or "passed").
+        "penalty": ``penalty`` (ε, force per length; default 1e6 × the stiffness the walls
+        see, :func:`contactqp.model.wall_stiffness`), ``max_iterations``. "augmented":
+        ``penalty`` (default 100 × the stiffness the walls see, 1e-4 of the penalty
+        method's default), ``tolerance`` (default 1e-10: an update that changes λ by less
+        than this times max(‖λ‖, ‖P‖) ends it), ``max_iterations`` (default 100 updates;
+        past them the last iterate comes back with ``claimed_success`` False). "qp":
+        ``backend`` ("clarabel" (default), "osqp", "cvxpy" or "qpsolvers"), ``solver`` (None:
+        the backend's default), ``accuracy`` ("default" or "high"), ``scale`` (default
+        True), ``verbose`` (default False): see :mod:`contactqp.methods.qp`. "lemke":
+        ``max_iterations`` (pivots). "pgs": ``relaxation`` (ω in (0, 2), default 1),
+        ``tolerance``, ``max_iterations``. "semismooth_newton": ``ncp`` ("min" or
+        "fischer-burmeister"), ``tolerance``, ``max_iterations``. "nitsche": ``gamma0``
+        (default 100), ``theta`` (1, 0 or −1), ``max_iterations``.
 
-    Methods and their options (:data:`contactqp.methods.METHODS`): "lagrange"
-    (max_iterations), "penalty" (penalty ε, force per length in the scene's units, default
-    1e6 × the stiffness the walls see; max_iterations), "augmented" (penalty, default 100 ×
-    the stiffness the walls see; tolerance, default 1e-10; max_iterations), "qp" (backend
-    "clarabel" (default), "osqp", "cvxpy" or "qpsolvers"; solver, None for the backend's
-    default; accuracy "default" or "high"; scale, default True; verbose, default False: see
-    :mod:`contactqp.methods.qp`).
+    Returns
+    -------
+    Result
+        The answer and its independent check (:class:`~contactqp.result.Result`:
+        ``verified``, ``physical``, ``summary()``, ``to_json()``).
 
-    ``formulation``: "auto" (the default: "condensed" where the method takes it, the scene
-    has at most AUTO_CONDENSE contact nodes and at least AUTO_CONDENSE_NODES free nodes, and
-    the method is not Lagrange with its hull active set, else "full"; the same answer, and the
-    Result's options say which ran), "full" (every free node an unknown), "condensed" (the
-    method sees only the nodes that carry contacts, a chain again, and every displacement is
-    recovered by statics: :func:`contactqp.model.condense`) or "strain" (lagrange and qp
-    only: the element elongations are unknowns too, tied to the displacements by equality rows
-    whose multipliers are the element forces: :func:`contactqp.model.elongation_rows`).
+    Raises
+    ------
+    OptionError
+        A bad method, contact, formulation or option (one line naming it and its value),
+        equality contact that ties a node twice, or a method that does not take the scene
+        (Nitsche on an interior wall).
+    SceneError
+        A scene file that cannot be read, or a scene that is not valid.
+    SolverNotAvailable
+        The QP backend or solver asked for is not installed (the message says how to add it).
+    SolverError
+        The method could not produce an answer (a singular system, a loop that does not end).
     """
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
     start = time.perf_counter()
