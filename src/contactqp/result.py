@@ -25,7 +25,6 @@ from contactqp.model import (
 )
 from contactqp.scene import Scene
 
-
 TOUCHING = 1e-12  # a penetration within this of U is round-off: the contact touches
 
 
