@@ -50,6 +50,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="benchmarks/out", help="output folder")
     parser.add_argument("--scenes", type=int, default=1000, help="guarantee: random scenes")
     parser.add_argument("--seed", type=int, default=2026, help="guarantee: their seed")
+    parser.add_argument("--floating", type=float, default=0.0,
+                        help="guarantee: the chance that a bar has no support (held by contact)")
     parser.add_argument("--check", metavar="DIR", help="check a matrix output folder and stop")
     args = parser.parse_args(argv)
     if args.check:
@@ -75,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
             lcp.main(args.quick, out / "lcp")
         elif name == "guarantee":
             scenes = min(args.scenes, 100) if args.quick else args.scenes
-            status |= guarantee.main(scenes, args.seed, out / "guarantee")
+            status |= guarantee.main(scenes, args.seed, out / "guarantee", args.floating)
         else:
             groups.GROUPS[name](args.quick, out / name)
     return status

@@ -147,6 +147,19 @@ def test_a_prepared_free_bar_refuses_loads_that_pull_it_away():
         prepared.solve(loads=[-2e3])
 
 
+@pytest.mark.parametrize("method", ["lagrange", "penalty", "qp"])
+def test_a_batch_of_free_bar_cases_carries_each_load(method):
+    """Free bars are solved case by case (the cases engine needs K⁻¹); each case's wall
+    carries its own load, and a case whose load pulls the bar away names the case."""
+    prepared = contactqp.prepare(free_bar(), method)
+    loads = np.array([[1e3], [2e3], [5e2]])
+    batch = prepared.solve_many(loads=loads)
+    assert batch.verified.all()
+    np.testing.assert_allclose(batch.contact_force[:, 0], loads[:, 0], rtol=1e-5)
+    with pytest.raises(contactqp.SceneError, match=r"case 1: nothing holds bar\[0\]"):
+        prepared.solve_many(loads=np.array([[1e3], [-1e3]]))
+
+
 def test_an_answer_that_leaves_a_free_bar_unheld_is_not_verified():
     """u and λ = 0 balance nothing; and an answer that puts the bar anywhere with λ = F on a
     wall it does not touch says nothing about where the bar is."""

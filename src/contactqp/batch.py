@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from contactqp.check import TOLERANCES, natural_map, row_compliance_roots
-from contactqp.errors import ContactqpError, SolverError
+from contactqp.errors import ContactqpError, SceneError, SolverError
 from contactqp.methods import cases as many
 from contactqp.model import Model, displacement_scale_rule, force_scale_rule, load_force_terms
 from contactqp.result import Result, Solution, make_result
@@ -254,7 +254,10 @@ def _alone(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None
            case: int) -> Result:
     """Case ``case`` solved on its own (:meth:`Prepared.solve`); bad values name the case."""
     scene = _case_scene(prepared, loads, gaps, case)
-    return prepared.solve_scene(scene)
+    try:
+        return prepared.solve_scene(scene)
+    except SceneError as error:  # e.g. a load that pulls a bar held by contact alone away
+        raise SceneError(f"case {case}: {error}") from None
 
 
 def _values(values: np.ndarray | None, own: np.ndarray, cases: int) -> np.ndarray:

@@ -31,8 +31,10 @@ CASES_ENTRIES = 2**22  # ... and free nodes x rows, the dense K⁻¹Cᵀ it buil
 
 
 def fits(model: Model) -> bool:
-    """Whether :func:`solve_cases` takes the model: few contact rows (W is dense)."""
-    return 0 < model.n_contacts <= CASES_ROWS and model.n_free * model.n_contacts <= CASES_ENTRIES
+    """Whether :func:`solve_cases` takes the model: few contact rows (W is dense), and K⁻¹
+    (no bar held by contact alone, :attr:`Model.floating`)."""
+    return (0 < model.n_contacts <= CASES_ROWS and model.n_free * model.n_contacts <= CASES_ENTRIES
+            and not model.floating)
 
 
 @dataclass(frozen=True)
