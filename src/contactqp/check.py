@@ -58,7 +58,7 @@ from contactqp.model import (
     link_forces,
     penetration,
 )
-from contactqp.scene import Scene
+from contactqp.scene import Scene, row_names
 
 
 @dataclass(frozen=True)
@@ -159,7 +159,8 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
     physical = pulling <= tolerances.sign
     notes = list(failures)
     if not physical:
-        which = ", ".join(f"{_row_name(layout.scene, i)} {lam[i]:.6g} N"
+        names = row_names(layout.scene)
+        which = ", ".join(f"{names[i]} {lam[i]:.6g} N"
                           for i in np.flatnonzero(lam < 0))
         notes.append(f"non-physical: a wall pulls the bar ({which}); a rigid wall can only push")
     return Check(residuals, not failures, physical, "; ".join(notes),
@@ -199,11 +200,6 @@ def row_compliance_roots(layout: Layout) -> np.ndarray:
 def _shape(name: str, values: np.ndarray, size: int) -> None:
     if values.size != size:
         raise OptionError(f"{name} must have {size} values for this scene, got {values.size}")
-
-
-def _row_name(scene: Scene, row: int) -> str:
-    n_walls = len(scene.walls)
-    return f"wall[{row}]" if row < n_walls else f"contact[{row - n_walls}]"
 
 
 def _failed(contact: str, lam: np.ndarray, F: float, U: float,

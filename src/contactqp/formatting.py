@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from contactqp.check import TOLERANCES
-from contactqp.scene import Scene
+from contactqp.scene import Scene, row_names  # noqa: F401  (row_names: re-exported)
 
 FORCE_DIGITS = 10  # significant digits of F a force is shown to
 WIDTH = 110  # lines of prose (notes, summaries) are wrapped to this many characters
@@ -63,13 +63,6 @@ def forces_summary(forces: np.ndarray, scale: float) -> str:
         return force(forces[0], scale) if forces.size else "-"
     top = force(forces[largest_entry(forces)], scale)
     return f"{top} ({int(np.count_nonzero(carrying(forces, scale)))}/{forces.size})"
-
-
-def row_names(scene: Scene) -> list[str]:
-    """The name of each contact row as the scene file and the messages name it: wall[i] for
-    the walls, then contact[j] for the bar contacts."""
-    return ([f"wall[{i}]" for i in range(len(scene.walls))]
-            + [f"contact[{j}]" for j in range(len(scene.contacts))])
 
 
 def text_table(header: Sequence[tuple[str, str]], rows: Sequence[Sequence[str]]) -> str:

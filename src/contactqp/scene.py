@@ -526,6 +526,13 @@ class Scene:
         return scene
 
 
+def row_names(scene: Scene) -> list[str]:
+    """The name of each contact row as the scene file and the messages name it: wall[i] for
+    the walls, then contact[j] for the bar contacts."""
+    return ([f"wall[{i}]" for i in range(len(scene.walls))]
+            + [f"contact[{j}]" for j in range(len(scene.contacts))])
+
+
 def _valued(items: tuple, name: str, values: np.ndarray) -> tuple:
     """``items`` (frozen dataclasses, already checked) with field ``name`` set to ``values``
     (checked numbers): copies made field by field, 4x faster than dataclasses.replace, which
