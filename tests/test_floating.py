@@ -10,6 +10,8 @@ its contacts, so the contacts carry its net load.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -19,6 +21,7 @@ from contactqp.feasibility import MAX_FLOATING_BARS, unheld_bars
 from contactqp.reference import reference
 
 E = 200e9
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 AREAS = [1e-3, 5e-4, 2e-4, 1e-4]  # k_e = E·A/0.25 m: 8e8, 4e8, 1.6e8, 8e7 N/m
 BAR = Bar.from_areas(AREAS, E, length=1.0)
 K_E = E * np.array(AREAS) / 0.25
@@ -79,6 +82,17 @@ def test_a_free_bar_pressed_against_a_supported_one(method, options):
     assert result.verified, result.message
     assert result.contact_force[0] == pytest.approx(F, rel=TOLERANCE[method])
     assert result.u[5] == pytest.approx(F * np.sum(1.0 / K_E), rel=1e-5)
+
+
+def test_the_example_scene_file_matches_its_closed_form():
+    """examples/held_by_contact.toml: k0 = k1 = 2e7 N/m, F = 20 kN through the contact; bar 0's
+    tip at −F/k0, bar 1's node 0 a gap behind it, its loaded end F/k1 further."""
+    scene = contactqp.load_scene(EXAMPLES / "held_by_contact.toml")
+    result = contactqp.solve(scene)
+    k, F, g = 2e7, 2e4, 5e-5
+    assert result.verified, result.message
+    assert result.contact_force[0] == pytest.approx(F, rel=1e-12)
+    assert result.u[[2, 3, 5]] == pytest.approx([-F / k, -F / k - g, -2 * F / k - g], rel=1e-12)
 
 
 def test_equality_contact_holds_a_free_bar_that_its_load_pulls_away():
