@@ -174,6 +174,19 @@ def test_a_batch_of_free_bar_cases_carries_each_load(method):
         prepared.solve_many(loads=np.array([[1e3], [-1e3]]))
 
 
+def test_the_load_path_of_a_free_bar_starts_one_step_in():
+    """With no load nothing fixes where a free bar is, so its curve starts at t = 1/steps; at
+    every step the wall carries t·F, and the first contact factor is 0."""
+    F, steps = 1e3, 4
+    path = contactqp.load_path(free_bar(F), steps=steps,
+                               methods={"lagrange": ("lagrange", "inequality", {})})
+    np.testing.assert_allclose(path.load_factor, [0.25, 0.5, 0.75, 1.0])
+    lagrange = path.methods["lagrange"]
+    assert lagrange.verified.all()
+    np.testing.assert_allclose(lagrange.contact_force[:, 0], path.load_factor * F, rtol=1e-12)
+    assert contactqp.first_contact_factor(free_bar(F)) == 0.0
+
+
 def test_an_answer_that_leaves_a_free_bar_unheld_is_not_verified():
     """u and λ = 0 balance nothing; and an answer that puts the bar anywhere with λ = F on a
     wall it does not touch says nothing about where the bar is."""

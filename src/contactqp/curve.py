@@ -109,8 +109,11 @@ class LoadPath:
 def first_contact_factor(scene: Scene) -> float:
     """The load factor at which the first contact closes under the scene's loads, from the
     contact-free answer t·K⁻¹P: min over rows with (C K⁻¹ P)ᵢ > 0 of gᵢ / (C K⁻¹ P)ᵢ
-    (inf when no load closes a contact)."""
+    (inf when no load closes a contact); 0 where a bar is held by contact alone: its
+    contacts carry load from the first."""
     model = build_model(as_scene(scene))
+    if model.floating:
+        return 0.0
     closing = model.C @ model.free_displacement
     reached = closing > 0.0
     return float(np.min(model.g[reached] / closing[reached], initial=np.inf))
@@ -124,7 +127,7 @@ def _factors(steps: Any) -> np.ndarray:
 def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
               methods: dict[str, tuple[str, str, dict[str, Any]]] | None = None) -> LoadPath:
     """The force–displacement curve of ``scene`` (default scene when None) at ``steps`` load
-    factors from 0 to 1, for each of ``methods`` (name -> (method, contact, options); default
+    factors from 0 to 1 (from 1/steps where a bar is held by contact alone), for each of ``methods`` (name -> (method, contact, options); default
     :func:`curve_methods`): each method prepared once and its steps solved as one batch
     (:meth:`contactqp.Prepared.solve_many`). A method that cannot solve the scene (its error,
     a :class:`~contactqp.errors.ContactqpError`) has no curve: :attr:`LoadPath.failed` says
@@ -132,6 +135,8 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
     scene = as_scene(scene)
     factors = _factors(steps)
     model = build_model(scene)
+    if model.floating:  # with no load nothing fixes where such a bar is: start one step in
+        factors = np.linspace(0.0, 1.0, factors.size + 1)[1:]
     methods = curve_methods(model) if methods is None else methods
     node = model.layout.load_point()
     paths, failed = {}, {}
