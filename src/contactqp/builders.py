@@ -40,6 +40,24 @@ def default_scene(elements: int = DEFAULT_ELEMENTS, area_rule: AreaRule = "midpo
     200 MPa; four equal elements with the area of the circle at mid-length; 565486.67 N in +x
     at node 2 (mid-length); a rigid wall 0.1 mm beyond the tip in +x. ``elements`` (even) and
     ``area_rule`` re-mesh the same bar, for convergence studies.
+
+    Parameters
+    ----------
+    elements : int
+        The number of equal elements (even, so that the load stays at mid-length; default 4).
+    area_rule : str
+        ``"midpoint"`` (the course problem: the circle's area at mid-length) or ``"exact"`` (the
+        constant area with the cone segment's flexibility).
+
+    Returns
+    -------
+    Scene
+        The scene, in SI units.
+
+    Raises
+    ------
+    SceneError
+        ``elements`` is not a positive even number, or ``area_rule`` is unknown.
     """
     elements = whole_number("elements", elements, 2)
     if elements % 2:
@@ -63,8 +81,24 @@ def default_scene(elements: int = DEFAULT_ELEMENTS, area_rule: AreaRule = "midpo
 
 def obstacle(elements: int) -> Scene:
     """The default scene's bar (``elements`` exact-area elements, its load at mid-length)
-    beside an obstacle: a + wall at every node, gaps g(x) = 0.2 mm·(x/L)² + 10 µm·|sin 37x/L|.
-    The discrete obstacle problem: a few contact patches, whose nodes depend on the mesh."""
+    beside an obstacle: a + wall at every node, gaps g(x) = 0.2 mm·(x/L)² + 10 µm·abs(sin 37x/L).
+    The discrete obstacle problem: a few contact patches, whose nodes depend on the mesh.
+
+    Parameters
+    ----------
+    elements : int
+        The number of elements (and of walls).
+
+    Returns
+    -------
+    Scene
+        The scene, in SI units.
+
+    Raises
+    ------
+    SceneError
+        ``elements`` is not a positive whole number.
+    """
     elements = whole_number("elements", elements, 2)
     x = np.linspace(0.0, 1.0, elements + 1)
     gaps = 2e-4 * x**2 + 1e-5 * np.abs(np.sin(37.0 * x))
@@ -75,7 +109,23 @@ def obstacle(elements: int) -> Scene:
 def channel(contacts: int) -> Scene:
     """The default scene's bar in a narrow wavy channel: a wall on both sides of every node
     (``contacts`` walls, ``contacts``/2 elements), centre c(x) = 0.1 mm·sin(3πx/L) +
-    0.15 mm·x/L, half-width 5 µm; most nodes end touching one side or the other."""
+    0.15 mm·x/L, half-width 5 µm; most nodes end touching one side or the other.
+
+    Parameters
+    ----------
+    contacts : int
+        The number of walls (two per node: ``contacts``/2 elements).
+
+    Returns
+    -------
+    Scene
+        The scene, in SI units.
+
+    Raises
+    ------
+    SceneError
+        ``contacts`` is not a whole number of at least 4.
+    """
     elements = max(whole_number("contacts", contacts, 4) // 2, 2)
     x = np.linspace(0.0, 1.0, elements + 1)
     centre, half = 1e-4 * np.sin(3.0 * np.pi * x) + 1.5e-4 * x, 5e-6
@@ -87,7 +137,23 @@ def channel(contacts: int) -> Scene:
 def flat_patch(contacts: int) -> Scene:
     """The default scene's bar (``contacts`` elements) pressed onto a flat wall 10 µm from
     every node by a uniform load of 2 MN/m (no point load): 95 % of the nodes end in contact,
-    in one patch."""
+    in one patch.
+
+    Parameters
+    ----------
+    contacts : int
+        The number of elements (and of walls).
+
+    Returns
+    -------
+    Scene
+        The scene, in SI units.
+
+    Raises
+    ------
+    SceneError
+        ``contacts`` is not a positive whole number.
+    """
     scene = _tapered(whole_number("contacts", contacts, 2), point_load=False)
     scene = replace(scene, distributed=(DistributedLoad(2e6),), name=f"flat patch ({contacts} walls)")
     return wall_at_every_node(scene, 1e-5)
@@ -126,6 +192,16 @@ def minimal(scene: Scene) -> Scene:
     are those of the merged element's equivalent area: for a taper meshed with
     ``area_rule="exact"`` that is the exact cone's, and one element per segment reproduces the
     continuum answer.
+
+    Parameters
+    ----------
+    scene : Scene
+        Any scene.
+
+    Returns
+    -------
+    Scene
+        The same scene on the fewest nodes.
     """
     bars, numbers = [], []
     for b, bar in enumerate(scene.bars):
@@ -161,7 +237,25 @@ def minimal(scene: Scene) -> Scene:
 
 def convert_units(scene: Scene, units: str) -> Scene:
     """The same physical scene in another unit system (:data:`UNIT_SYSTEMS`): lengths, areas,
-    moduli, yield stresses, gaps and distributed loads converted; point loads stay in N."""
+    moduli, yield stresses, gaps and distributed loads converted; point loads stay in N.
+
+    Parameters
+    ----------
+    scene : Scene
+        Any scene.
+    units : str
+        One of :data:`contactqp.UNIT_SYSTEMS`: ``"SI"`` or ``"mm-N-MPa"``.
+
+    Returns
+    -------
+    Scene
+        The same physical scene in ``units``.
+
+    Raises
+    ------
+    SceneError
+        ``units`` is not a known unit system.
+    """
     if units not in UNIT_SYSTEMS:
         raise SceneError(f"units must be one of {', '.join(map(repr, UNIT_SYSTEMS))}, "
                          f"got {units!r}")
@@ -186,7 +280,29 @@ def wall_at_every_node(scene: Scene, gap: Any, side: WallSide = "+", bar: int = 
     """The scene with a wall at every node of bar ``bar`` that is not a support (the discrete
     obstacle problem): ``gap`` one value (m) or one per node of the bar (supports' ignored).
     Where the scene has a wall on that side already, the smaller gap is kept (both walls
-    hold, so the nearer one is the constraint)."""
+    hold, so the nearer one is the constraint).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene to add the walls to.
+    gap : float or array_like
+        One gap, or one per node of the bar, in the scene's length unit.
+    side : str
+        ``"+"`` (the node may not pass the wall in +x, the default) or ``"-"``.
+    bar : int
+        The bar (default 0).
+
+    Returns
+    -------
+    Scene
+        A new scene; ``scene`` is unchanged.
+
+    Raises
+    ------
+    SceneError
+        A bad bar, side or gap (or one gap per node of the wrong length).
+    """
     b = whole_number("obstacle.bar", bar, 0, "bar number")
     if b >= len(scene.bars):
         raise SceneError(f"obstacle.bar = {b}: the scene has bars 0 to {len(scene.bars) - 1}")

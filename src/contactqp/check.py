@@ -67,6 +67,21 @@ class Tolerances:
 
     The explicit Lagrange method reaches ~1e-15. Equilibrium and sign are held to 1e-6 of F;
     feasibility, complementarity and displacement to 1e-5 (of F, F and U).
+
+    Parameters
+    ----------
+    equilibrium : float
+        Of the section equilibrium residual, relative to F (default 1e-6).
+    feasibility : float
+        Of the penetration as a force, relative to F (default 1e-5).
+    complementarity : float
+        Relative to F (default 1e-5).
+    sign : float
+        Of a pulling contact force, relative to F (default 1e-6).
+    force : float
+        Of the force error bound, relative to F (default 1e-5).
+    displacement : float
+        Of the displacement error bound, relative to U (default 1e-5).
     """
 
     equilibrium: float = 1e-6
@@ -122,7 +137,36 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
           element_force: np.ndarray | None = None) -> Check:
     """Check displacements (every node) and forces against a model (or a scene, whose model is
     built), independently of how they were found. ``contact`` is "inequality" or "equality".
-    ``element_force``: the element forces k_e·(u_(e+1) − u_e) when the caller has them."""
+    ``element_force``: the element forces k_e·(u_(e+1) − u_e) when the caller has them.
+
+    Parameters
+    ----------
+    model : Model or Scene
+        What the answer is checked against.
+    u : array_like
+        The displacement of every node (the global numbering of :class:`Layout`).
+    contact_force : array_like
+        The force of every contact row (walls, then bar contacts).
+    reactions : array_like
+        The force of every support, in +x.
+    contact : str
+        ``"inequality"`` or ``"equality"``.
+    tolerances : Tolerances
+        The residuals' tolerances (default :data:`contactqp.TOLERANCES`).
+    element_force : array_like, optional
+        The element forces, when the caller has them.
+
+    Returns
+    -------
+    Check
+        ``verified``, ``physical``, the residuals, the error bounds and the message, as a
+        Result carries them.
+
+    Raises
+    ------
+    OptionError
+        A bad contact kind, or an array of the wrong length for the model.
+    """
     model = model if isinstance(model, Model) else build_model(model)
     layout = model.layout
     if contact not in ("inequality", "equality"):

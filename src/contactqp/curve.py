@@ -110,7 +110,23 @@ def first_contact_factor(scene: Scene) -> float:
     """The load factor at which the first contact closes under the scene's loads, from the
     contact-free answer t·K⁻¹P: min over rows with (C K⁻¹ P)ᵢ > 0 of gᵢ / (C K⁻¹ P)ᵢ
     (inf when no load closes a contact); 0 where a bar is held by contact alone: its
-    contacts carry load from the first."""
+    contacts carry load from the first.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene, at its full loads.
+
+    Returns
+    -------
+    float
+        The load factor t* at which the first contact closes (inf if none does).
+
+    Raises
+    ------
+    SceneError
+        A scene whose model cannot be built (see :func:`contactqp.build_model`).
+    """
     model = build_model(as_scene(scene))
     if model.floating:
         return 0.0
@@ -131,7 +147,29 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
     :func:`curve_methods`): each method prepared once and its steps solved as one batch
     (:meth:`contactqp.Prepared.solve_many`). A method that cannot solve the scene (its error,
     a :class:`~contactqp.errors.ContactqpError`) has no curve: :attr:`LoadPath.failed` says
-    why, and the other methods are stepped all the same."""
+    why, and the other methods are stepped all the same.
+
+    Parameters
+    ----------
+    scene : Scene or None
+        The scene (None: the default scene).
+    steps : int
+        The number of load factors, 0 and 1 included (default 21).
+    methods : dict, optional
+        name -> (method, contact, options); default :func:`curve_methods`.
+
+    Returns
+    -------
+    LoadPath
+        The load factors, the load node and every method's curve (or why it has none).
+
+    Raises
+    ------
+    OptionError
+        ``steps`` is not a whole number of at least 2, or a method's options are bad.
+    SceneError
+        A scene whose loads leave a bar held by contact alone unheld.
+    """
     scene = as_scene(scene)
     factors = _factors(steps)
     model = build_model(scene)

@@ -167,7 +167,35 @@ def prepare(scene: Scene | str | None = None, method: str = "lagrange",
             **options: Any) -> Prepared:
     """Prepare ``scene`` (a Scene, a scene file's path or None for the default scene) for many
     solves by ``method`` with ``contact`` and ``options`` as :func:`contactqp.solve` takes
-    them: the options are checked, the scene laid out and its model built once."""
+    them: the options are checked, the scene laid out and its model built once.
+
+    Parameters
+    ----------
+        scene : Scene, str, os.PathLike or None
+            The scene, the path of a scene file, or None for the default scene.
+    method : str
+        One of :data:`contactqp.METHODS` (default ``"lagrange"``).
+    contact : str
+        ``"inequality"`` (unilateral, the default) or ``"equality"``.
+    formulation : str
+        ``"auto"`` (default), ``"full"``, ``"condensed"`` or ``"strain"``, as for
+        :func:`contactqp.solve`.
+    **options
+        The method's options, as :func:`contactqp.solve` takes them.
+
+    Returns
+    -------
+    Prepared
+        Its :meth:`~Prepared.solve` and :meth:`~Prepared.solve_many` take new load values and
+        gaps.
+
+    Raises
+    ------
+    OptionError
+        An unknown method, contact kind, formulation or option, or a bad option value.
+    SceneError
+        A scene file that cannot be read or holds bad values.
+    """
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
     model = build_model(scene)
     for name in TOPOLOGY:  # made once here, shared by every case's layout

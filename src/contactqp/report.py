@@ -78,6 +78,16 @@ def table(runs: list[Run]) -> str:
     check's reason, a method that could not solve the scene) is written once, however many
     rows share it; the stress beyond yield once, from the first verified answer.
     :func:`detail_table` lists every contact.
+
+    Parameters
+    ----------
+    runs : list of Run
+        The runs of :func:`contactqp.compare` (all on one scene).
+
+    Returns
+    -------
+    str
+        The table and its notes, one line each, ready to print.
     """
     scene = _scene_of(runs)
     unit = scene.unit if scene is not None else None
@@ -128,7 +138,18 @@ def notes(runs: list[Run]) -> list[str]:
 
 def detail_table(runs: list[Run]) -> str:
     """Every contact of every run: its force, the exact force where the runs carry the exact
-    reference, and its penetration; then every support's reaction; in the scene's units."""
+    reference, and its penetration; then every support's reaction; in the scene's units.
+
+    Parameters
+    ----------
+    runs : list of Run
+        The runs of :func:`contactqp.compare` (all on one scene).
+
+    Returns
+    -------
+    str
+        One line per run and contact, then per support, ready to print.
+    """
     scene = _scene_of(runs)
     if scene is None:
         return "no run produced an answer"

@@ -55,7 +55,7 @@ class Result:
     penetration : one per contact row (m), positive when the contact is closed past its gap.
     element_force, stress : axial force (N) and stress (Pa) of each element, bar after bar,
         tension positive.
-    stress_ratio : largest |stress| over the yield stress (None without a yield stress).
+    stress_ratio : largest abs(stress) over the yield stress (None without a yield stress).
     model : the model solved (``scene`` and ``layout`` are its scene and numbering).
     residuals, verified, physical, message : the independent check
         (:func:`contactqp.check.check`).

@@ -171,6 +171,22 @@ class Bar:
     rectangle, uniform or tapered), :meth:`tapered_circle` or :meth:`from_areas` (one area per
     element); the arrays are read-only. Each constructor takes ``name``: how its messages name
     the bar (``"bar[1]"``, as a scene file does).
+
+    Parameters
+    ----------
+    lengths : array_like
+        The element lengths (m), positive.
+    areas : array_like
+        The element areas (m²), positive.
+    youngs_modulus : array_like
+        Young's modulus of each element (Pa), positive.
+    yield_stress : float, optional
+        The yield stress (Pa).
+
+    Raises
+    ------
+    SceneError
+        Arrays of different lengths, or a value that is not a positive finite number.
     """
 
     lengths: np.ndarray
@@ -337,7 +353,15 @@ class Bar:
 
 @dataclass(frozen=True)
 class Support:
-    """A node of bar ``bar`` held at zero displacement."""
+    """A node of bar ``bar`` held at zero displacement.
+
+    Parameters
+    ----------
+    node : int
+        The node (0 at x = 0).
+    bar : int
+        The bar (default 0).
+    """
 
     node: int
     bar: int = 0
@@ -345,7 +369,17 @@ class Support:
 
 @dataclass(frozen=True)
 class Load:
-    """A point load at a node of bar ``bar`` (N, positive in +x)."""
+    """A point load at a node of bar ``bar`` (N, positive in +x).
+
+    Parameters
+    ----------
+    node : int
+        The node.
+    force : float
+        The force (N), positive in +x.
+    bar : int
+        The bar (default 0).
+    """
 
     node: int
     force: float
@@ -357,7 +391,19 @@ class DistributedLoad:
     """A uniform axial load ``intensity`` (N/m, positive in +x) on elements ``start`` to
     ``stop`` − 1 of bar ``bar`` (``stop`` None: to the bar's end). Each element passes
     intensity × length / 2 to each of its nodes: the consistent load of a linear element, with
-    which the nodal displacements of a bar are exact."""
+    which the nodal displacements of a bar are exact.
+
+    Parameters
+    ----------
+    intensity : float
+        The load per length (N/m), positive in +x.
+    bar : int
+        The bar (default 0).
+    start : int
+        The first element loaded (default 0).
+    stop : int, optional
+        One past the last element loaded (default: the bar's end).
+    """
 
     intensity: float
     bar: int = 0
@@ -369,8 +415,22 @@ class DistributedLoad:
 class BarContact:
     """Contact between node ``node_a`` of bar ``bar_a`` and node ``node_b`` of bar ``bar_b``,
     ``gap`` (m) apart, a facing b in +x: u_a − u_b <= gap. Its force λ >= 0 pushes a in −x
-    and b in +x. A negative gap is an interference: the two nodes start |gap| into each other
-    and the contact pushes them apart (a press fit between bars)."""
+    and b in +x. A negative gap is an interference: the two nodes start abs(gap) into each other
+    and the contact pushes them apart (a press fit between bars).
+
+    Parameters
+    ----------
+    bar_a : int
+        The bar of node a.
+    node_a : int
+        Node a, on the −x side of the contact.
+    bar_b : int
+        The bar of node b.
+    node_b : int
+        Node b, on the +x side.
+    gap : float
+        The distance between the two nodes (m); negative: a press fit.
+    """
 
     bar_a: int
     node_a: int
@@ -382,10 +442,21 @@ class BarContact:
 @dataclass(frozen=True)
 class Wall:
     """A rigid wall at a node, ``gap`` (m) away from it on ``side``. A negative gap is an
-    interference: the node starts |gap| past the wall, which pushes it back (a press fit).
+    interference: the node starts abs(gap) past the wall, which pushes it back (a press fit).
 
     ``side="+"``: the node may not move past u = +gap; the wall can only push in -x.
     ``side="-"``: the node may not move past u = -gap; the wall can only push in +x.
+
+    Parameters
+    ----------
+    node : int
+        The node.
+    gap : float
+        The distance from the node to the wall (m); negative: a press fit.
+    side : str
+        ``"+"`` (the default) or ``"-"``.
+    bar : int
+        The bar (default 0).
     """
 
     node: int
@@ -407,6 +478,31 @@ class Scene:
     with no support is held by its walls and bar contacts alone; its loads must press it
     against them (checked at the solve, :func:`contactqp.feasibility.unheld_bars`). Contact rows, in this order everywhere (contact forces, penetrations):
     one per wall, then one per bar contact. ``units``: :data:`UNIT_SYSTEMS`.
+
+    Parameters
+    ----------
+    bars : Bar or sequence of Bar
+        The bars, numbered 0, 1, … in this order.
+    supports : sequence of Support
+        The nodes held at u = 0.
+    loads : sequence of Load
+        The point loads.
+    walls : sequence of Wall
+        The rigid walls.
+    name : str
+        How tables, charts and messages name the scene.
+    distributed : sequence of DistributedLoad
+        The uniform axial loads.
+    contacts : sequence of BarContact
+        The contacts between bars.
+    units : str
+        ``"SI"`` (m, m², N, Pa; the default) or ``"mm-N-MPa"``.
+
+    Raises
+    ------
+    SceneError
+        A bad value, a reference to a bar or node that does not exist, or constraints that leave
+        a node no position (one line naming the field and the value).
     """
 
     bars: tuple[Bar, ...]

@@ -143,7 +143,25 @@ def _section_from_dict(data: Any, name: str) -> tuple[Section, Any]:
 
 def scene_from_dict(data: dict, name: str = "scene") -> Scene:
     """Build a scene from the parsed TOML structure (docs/scene_files.md): one ``[bar]``
-    or several ``[[bar]]`` (each may have its own ``material`` table)."""
+    or several ``[[bar]]`` (each may have its own ``material`` table).
+
+    Parameters
+    ----------
+    data : dict
+        The parsed TOML, as :func:`tomllib.loads` gives it.
+    name : str
+        The scene's name where ``data`` has no ``name`` key.
+
+    Returns
+    -------
+    Scene
+        The scene, validated.
+
+    Raises
+    ------
+    SceneError
+        An unknown key, a missing one, or a bad value (naming the field).
+    """
     data = _table(data, "scene", _TOP_KEYS, {"bar"})
     material = None
     if "material" in data:
@@ -188,7 +206,24 @@ def scene_from_dict(data: dict, name: str = "scene") -> Scene:
 
 
 def load_scene(path: str | Path) -> Scene:
-    """Read a scene from a TOML file (format in docs/scene_files.md)."""
+    """Read a scene from a TOML file (format in docs/scene_files.md).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The TOML file.
+
+    Returns
+    -------
+    Scene
+        The scene, validated.
+
+    Raises
+    ------
+    SceneError
+        The file does not exist, cannot be read, is not TOML, or holds a bad key or value (one
+        line naming the field as the file spells it).
+    """
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -219,7 +254,18 @@ def _bar_geometry(bar: Bar) -> list[str]:
 def scene_to_toml(scene: Scene) -> str:
     """The scene as TOML text that :func:`load_scene` reads back to the same scene: each
     bar's areas and lengths (a section as the areas it gave, one ``area`` for a uniform
-    bar), an obstacle as its walls."""
+    bar), an obstacle as its walls.
+
+    Parameters
+    ----------
+    scene : Scene
+        Any scene.
+
+    Returns
+    -------
+    str
+        The TOML text.
+    """
     lines = [f"name = {json.dumps(scene.name)}",  # JSON strings are TOML
              f"units = {json.dumps(scene.units)}"]
     several = len(scene.bars) > 1

@@ -49,7 +49,7 @@ class Run:
     @property
     def exact_error(self) -> float | None:
         """The largest error of the contact force on any node against the exact reference
-        (N): max |λ − λ_exact| where each node has one contact row. Per node, since where
+        (N): max abs(λ − λ_exact) where each node has one contact row. Per node, since where
         contacts close a loop only the force on each node is unique. None without a result
         or a reference."""
         if self.result is None or self.exact_force is None:
@@ -104,7 +104,27 @@ def compare(scene: Scene | str | None = None,
     """Solve ``scene`` (a Scene, a scene file's path, or None for the default scene) by every
     method and every installed QP solver, for each contact kind; the inequality runs carry the
     exact contact forces (:func:`exact_reference`) where there are some. A method that cannot
-    solve the scene is a Run with its error. :func:`contactqp.report.table` prints the runs."""
+    solve the scene is a Run with its error. :func:`contactqp.report.table` prints the runs.
+
+    Parameters
+    ----------
+        scene : Scene, str, os.PathLike or None
+            The scene, the path of a scene file, or None for the default scene.
+    contacts : tuple of str
+        The contact kinds to run, ``("inequality", "equality")`` by default.
+
+    Returns
+    -------
+    list of Run
+        One per method (and QP backend/solver) and contact kind, in the order the table shows.
+
+    Raises
+    ------
+    OptionError
+        ``scene`` is neither a Scene, a path nor None.
+    SceneError
+        A scene file that cannot be read or holds bad values.
+    """
     scene = as_scene(scene)
     exact = exact_reference(scene) if "inequality" in contacts else None
     rows = []
@@ -276,7 +296,30 @@ def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | Non
                   contact: str = "inequality") -> PenaltySweep:
     """Penetration and contact force of the penalty method (and of the augmented Lagrangian
     method with the same ε) for each ε in ``penalties`` (force per length in the scene's
-    units; default :func:`sweep_penalties`, 1 and 1e5 … 1e20 N/m)."""
+    units; default :func:`sweep_penalties`, 1 and 1e5 … 1e20 N/m).
+
+    Parameters
+    ----------
+    scene : Scene or None
+        The scene (None: the default scene).
+    penalties : tuple of float, optional
+        The values of ε, force per length in the scene's units.
+    contact : str
+        ``"inequality"`` (default) or ``"equality"``.
+
+    Returns
+    -------
+    PenaltySweep
+        Per ε the penalty's and the augmented method's runs, force errors against Lagrange and
+        penetrations; ``summary()`` says where the penalty stops converging.
+
+    Raises
+    ------
+    OptionError
+        A bad contact kind or ε.
+    SolverError
+        The Lagrange solution the sweep compares with cannot be computed.
+    """
     scene = as_scene(scene)
     penalties = sweep_penalties(scene) if penalties is None else tuple(penalties)
     reference = solve(scene, "lagrange", contact)

@@ -10,7 +10,25 @@ class Units:
     """A consistent unit system (force = stress × area, stiffness = force / length): the
     names of its units, and the size of its length and stress units in SI (m, Pa). Every
     number of a scene is in its units, and so is every answer: the algebra needs no
-    conversion."""
+    conversion.
+
+    Parameters
+    ----------
+    name : str
+        The system's name (``"SI"``, ``"mm-N-MPa"``).
+    length : str
+        The name of its length unit.
+    area : str
+        The name of its area unit.
+    force : str
+        The name of its force unit.
+    stress : str
+        The name of its stress unit.
+    metre : float
+        The size of its length unit in metres.
+    pascal : float
+        The size of its stress unit in pascals.
+    """
 
     name: str
     length: str

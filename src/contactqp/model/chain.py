@@ -163,7 +163,7 @@ class Model:
         """F: the scene's force scale, from the loads and the prescribed gaps alone (never from
         an answer): the largest force the loads put through any cut of a bar
         (:func:`~contactqp.model.layout.load_force_scale`), and for a wall that starts past
-        its node (gap < 0) the force that pushes the node back, |gap| × the seen stiffness
+        its node (gap < 0) the force that pushes the node back, abs(gap) × the seen stiffness
         with the supports held. In a scene that nothing loads (the answer is u = 0, λ = 0) it
         is the softest element's stiffness times :attr:`displacement_scale`."""
         layout = self.layout
@@ -211,7 +211,23 @@ def displacement_scale_rule(free: Any, press_depth: Any, widest: Any, longest: A
 
 def build_model(scene: Scene | Layout) -> Model:
     """The model of a scene, O(n) in time and memory: K comes straight from the element
-    stiffnesses in band form (the chain with its supports taken out)."""
+    stiffnesses in band form (the chain with its supports taken out).
+
+    Parameters
+    ----------
+    scene : Scene or Layout
+        The scene, or its layout (the numbering, when it is already made).
+
+    Returns
+    -------
+    Model
+        K in band storage, the loads P, the contact rows C and gaps g, and the solves with K.
+
+    Raises
+    ------
+    SceneError
+        A scene whose loads leave a bar held by contact alone unheld.
+    """
     layout = scene if isinstance(scene, Layout) else scene.layout
     n = layout.n_nodes
     supports = np.sort(layout.support_nodes)

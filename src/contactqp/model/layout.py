@@ -52,7 +52,13 @@ def _read_only(array: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Layout:
-    """The numbering of a scene's nodes and the arrays along it (module docstring)."""
+    """The numbering of a scene's nodes and the arrays along it (module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene to number.
+    """
 
     scene: Scene
 
@@ -156,7 +162,7 @@ class Layout:
     @cached_property
     def press_fit_force(self) -> float:
         """The largest force that pushes a press fit apart (a wall that starts past its node,
-        or two bars that start into each other: gap < 0): |gap| × the stiffness the row sees
+        or two bars that start into each other: gap < 0): abs(gap) × the stiffness the row sees
         with the supports held (N); 0 without one."""
         return float(np.max(self.press_fit_forces, initial=0.0))
 

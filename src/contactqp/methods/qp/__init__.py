@@ -153,7 +153,13 @@ class QPSolverInfo:
 def available_qp_solvers() -> tuple[QPSolverInfo, ...]:
     """Every backend/solver pair contactqp knows, installed and usable or not, with the
     ``pip install`` that adds a missing one. Installed pairs come first. (Imports every
-    backend.)"""
+    backend.)
+
+    Returns
+    -------
+    tuple of QPSolverInfo
+        backend, solver, whether it is available, and the ``pip install`` that adds it.
+    """
     rows = []
     for name, backend in BACKENDS.items():
         module = backend_module(name)

@@ -207,6 +207,27 @@ def qp_problem(scene: Scene, contact: str = "inequality", scale: bool = True,
     solver's own equilibration may be better off on the scaled data (see :data:`~contactqp.methods.qp.settings.PRESCALED`).
     ``formulation="strain"`` gives the QP in displacements and element elongations
     (:func:`_strain_qp`).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene.
+    contact : str
+        ``"inequality"`` (C x <= g, the default) or ``"equality"`` (C x = g).
+    scale : bool
+        Scale the data to order one (default True).
+    formulation : str
+        ``"full"`` (default) or ``"strain"``.
+
+    Returns
+    -------
+    QPProblem
+        The QP data (sparse K, q, C, g) and the scales that map it back.
+
+    Raises
+    ------
+    OptionError
+        An unknown contact kind or formulation.
     """
     if contact not in ("inequality", "equality"):
         raise OptionError(f"contact must be one of inequality, equality; got {contact!r}")
