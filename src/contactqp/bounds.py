@@ -93,7 +93,12 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     # sum, not the largest, is what can move it (measured: Clarabel, three bars tied by a
     # contact, four rows ~100 N off each; the pair moved 2.7e-4 m, the largest force alone
     # bounded 2.0e-4 m, and the answer was verified 1.09e-5·U off)
-    carried = force_error + float(np.abs(moved).sum()) + gap_force + pair + closing
+    # ... and so does what equilibrium leaves over in the elements between them and the
+    # next held node, r_j beside c (propagate: an element's force error is c − r_j; measured:
+    # the augmented method, a bar held by contact alone pressing on a free bar's node, 0.0096 N
+    # off at the contact and 0.016 N left over along three elements, moved the pair 1.04e-9 m
+    # against a bound of 6.2e-10 m from the contact's error alone)
+    carried = force_error + float(np.abs(moved).sum()) + gap_force + pair + closing + r_max
     displacement_bound = coupled * (sway + gap_move) + carried * give
     force_bound *= coupled
     # and the answer itself is only stored to a few units of round-off: a force of 2e8 N from
