@@ -171,8 +171,8 @@ def prepare(scene: Scene | str | None = None, method: str = "lagrange",
 
     Parameters
     ----------
-        scene : Scene, str, os.PathLike or None
-            The scene, the path of a scene file, or None for the default scene.
+    scene : Scene, str, os.PathLike or None
+        The scene, the path of a scene file, or None for the default scene.
     method : str
         One of :data:`contactqp.METHODS` (default ``"lagrange"``).
     contact : str

@@ -38,7 +38,21 @@ def sweep_penalties(scene: Scene) -> tuple[float, ...]:
 @dataclass(frozen=True, eq=False)
 class Run:
     """One row of a comparison: a Result, or the error that stopped the method; with the
-    exact contact forces (N, one per contact row) where the comparison has them."""
+    exact contact forces (N, one per contact row) where the comparison has them.
+
+    Attributes
+    ----------
+    label : str
+        The method and its options as the table names them (``"penalty ε=1e+14"``).
+    contact : str
+        ``"inequality"`` or ``"equality"``.
+    result : Result or None
+        The checked answer; None where the method could not solve the scene.
+    error : str
+        Why the method could not solve the scene ("" where it did).
+    exact_force : numpy.ndarray or None
+        The exact contact forces, where the comparison has them.
+    """
 
     label: str
     contact: str
@@ -108,8 +122,8 @@ def compare(scene: Scene | str | None = None,
 
     Parameters
     ----------
-        scene : Scene, str, os.PathLike or None
-            The scene, the path of a scene file, or None for the default scene.
+    scene : Scene, str, os.PathLike or None
+        The scene, the path of a scene file, or None for the default scene.
     contacts : tuple of str
         The contact kinds to run, ``("inequality", "equality")`` by default.
 
