@@ -194,7 +194,7 @@ def test_solve_formulations_give_the_closed_form(capsys, formulation, method):
     assert code == 0
     data = json.loads(out)
     assert data["verified"] is True
-    # Clarabel at default accuracy: ~3e-10 of the force (README accuracy table); exact: 1e-12
+    # Clarabel at default accuracy: ~3e-10 of the force (the accuracy table of docs/howto/qp_solvers.md); exact: 1e-12
     assert data["contact_force"][0] == pytest.approx(closed_form_force(), rel=1e-8)
     if formulation == "strain":  # the tie rows' multipliers are the element forces
         assert data["info"]["element_force"][3] == pytest.approx(-closed_form_force(), rel=1e-8)
