@@ -15,7 +15,7 @@ first run found pushing: it certifies its answer whatever the start), relative t
 force. A run whose solve passes BUDGET, or would at the next size (PROJECTION times longer),
 is not run at larger sizes (recorded); the next size's time is projected from the growth
 measured over the last tenfold (PROJECTION times when there is none yet). Writes
-contacts.json, contacts.png and contacts.md (the README's table).
+contacts.json, contacts.png and contacts.md (the table docs/benchmarks.md shows).
 """
 
 from __future__ import annotations
@@ -121,7 +121,7 @@ def main(quick: bool, out: Path) -> None:
 
 
 def table(rows: list[dict]) -> str:
-    """The README's table: per obstacle and size, each run's time as floors end to end (the
+    """The table docs/benchmarks.md shows: per obstacle and size, each run's time as floors end to end (the
     method alone / the Result and its check in brackets), its iterations, its force error
     and whether it was verified."""
     runs = [label(m, o) for m, o in RUNS]

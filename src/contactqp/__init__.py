@@ -1,7 +1,7 @@
 """contactqp: contact mechanics of elastic bars written as constrained optimisation.
 
-scene → model (K, P, C, g) → method → checked Result → report. See the README for the
-conventions and the architecture. Importing contactqp loads no QP solver and no matplotlib: a
+scene → model (K, P, C, g) → method → checked Result → report. The documentation (docs/)
+gives the conventions and the architecture. Importing contactqp loads no QP solver and no matplotlib: a
 backend is imported when it is first used, matplotlib when a chart is drawn
 (:mod:`contactqp.plot`).
 

@@ -4,7 +4,7 @@ The scaled QP is O(1), so absolute and relative tolerances are alike. "default" 
 own default, written out so that every backend passes the same values (cvxpy would substitute
 its own for some, e.g. OSQP 1e-5); the one change is OSQP's polishing, on in both (cheap, and
 passed explicitly because cvxpy turns it off on a re-solve). "high" is near what each solver
-reaches in double precision. :func:`accuracy_table` prints the table the README shows (a test
+reaches in double precision. :func:`accuracy_table` prints the table docs/howto/qp_solvers.md shows (a test
 checks that they agree).
 """
 
@@ -94,7 +94,7 @@ def accuracy_settings(solver: str, accuracy: str, scaled: bool = False,
     in both (cheap, and passed explicitly because cvxpy turns it off on a re-solve). "high" is
     near what each solver reaches in double precision.
 
-    The values are :data:`ACCURACY` (:func:`accuracy_table` writes them as the README's table).
+    The values are :data:`ACCURACY` (:func:`accuracy_table` writes them as the table of docs/howto/qp_solvers.md).
 
     (a) cvxpy hands CVXOPT a cone rewrite of the QP, and CVXOPT fails there at 1e-9 on a
         six-element bar with four walls (measured).
@@ -116,7 +116,7 @@ def accuracy_settings(solver: str, accuracy: str, scaled: bool = False,
 
 
 def accuracy_table() -> str:
-    """:data:`ACCURACY` as the README's markdown table: solver, "default", "high"."""
+    """:data:`ACCURACY` as the markdown table of docs/howto/qp_solvers.md: solver, "default", "high"."""
     def cell(settings: dict[str, Any]) -> str:
         return ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
                          for k, v in settings.items()) or "its defaults"
