@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp import linalg
+from contactqp.methods import hull
 from contactqp.methods._active_set import active_set_loop, displacement_tolerance, pinning
 from contactqp.model import Condensed, Model, wall_stiffness
 from contactqp.result import Solution
@@ -54,6 +55,26 @@ def solve_penalty(model: Model | Condensed, contact: str, *, penalty: float | No
         tol = displacement_tolerance(u, g, P, K)
         return np.where(active, pen > -tol, pen > tol)
 
+    start, info = hull_start(model), {"penalty": eps}
+    if start is not None:
+        info["start"] = "the walls that push in the hull's answer"
     u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="penalty",
-                                         max_iterations=max_iterations, pin=pinning(model))
-    return Solution(u, lam, solver="penalty", iterations=iterations, info={"penalty": eps})
+                                         max_iterations=max_iterations, start=start,
+                                         pin=pinning(model))
+    return Solution(u, lam, solver="penalty", iterations=iterations, info=info)
+
+
+def hull_start(model: Model | Condensed) -> np.ndarray | None:
+    """The walls that push in the exact unilateral answer, as the hull loop finds it in O(n)
+    (:mod:`contactqp.methods.hull`; walls only, every bar supported), or None where it does not
+    apply. The penalty's loop from every wall open adds every passed wall at once and then
+    releases a couple per step from the edges of a contact patch: 502 steps on an obstacle of
+    10³ walls, 5000 on 10⁴ (measured); from the hull's set it settles in a few, at the same
+    answer (the penalised energy is strictly convex: its minimum is the loop's one fixed
+    point)."""
+    chain = model.full if isinstance(model, Condensed) else model
+    if not hull.applies(chain, "inequality"):
+        return None
+    factor = model.load_factor if isinstance(model, Condensed) else 1.0
+    found, reached = hull.solve_hull(chain, load_factor=factor)
+    return found.contact_force > 0.0 if found is not None else reached
