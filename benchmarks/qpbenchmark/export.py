@@ -6,8 +6,10 @@ beside it.
 
 Each QP is contactqp's (contactqp.methods.qp.problem): minimise ½ xᵀPx + qᵀx subject to
 G x <= h, x the free nodes' displacements (SI: in m; scaled: in units of U), P = K, q = −P_loads,
-G = C, h = g. Its duals z (qpsolvers' convention for G x <= h) are the contact forces: λ = z
-(SI, N) or λ = F·z (scaled). exact.json holds, per problem, the exact duals (from
+G = C, h = g (P positive definite; only semidefinite where a bar has no support and is held by
+its contacts alone: the free_bar, held_by_contact and free_bars problems, scaled from K with a
+spring per free bar as the library scales them). Its duals z (qpsolvers' convention for
+G x <= h) are the contact forces: λ = z (SI, N) or λ = F·z (scaled). exact.json holds, per problem, the exact duals (from
 contactqp.reference: statics in extended precision or rational arithmetic, never a solver),
 the scales U and F, and the scene's file so that a solution can be checked
 (benchmarks/qpbenchmark/compare.py).
@@ -27,7 +29,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))  # benchmarks/cases.py
 
 import contactqp
-from cases import default_with, tapered_scene, touching
+from cases import default_with, free_bar, tapered_scene, touching
 from contactqp.methods.qp.problem import qp_from_model
 from contactqp.reference import reference
 
@@ -36,19 +38,36 @@ EXAMPLES = HERE.parent.parent / "examples"
 
 def scenes() -> dict[str, contactqp.Scene]:
     """The test set's scenes: the default scene and its variants (open, touching, gap 0, press
-    fit), tapered bars of 10² to 10⁴ elements, a wall at every node of 10² and 10³ elements,
-    several bars and bar contacts (the example scene files)."""
+    fit), tapered bars of 10² to 10⁵ elements, a wall at every node of 10² and 10³ elements,
+    several bars and bar contacts (the example scene files), and bars held only by contact
+    (K singular: the default scene without its support, the example of a free bar pressed onto
+    a cantilever, two free bars between two walls)."""
     out = {"default": contactqp.default_scene(), "open": default_with(load_factor=0.1),
            "touching": touching(), "gap_0": default_with(gap=0.0),
            "press_fit": default_with(gap=-1e-4)}
-    for n in (100, 1000, 10_000):
+    for n in (100, 1000, 10_000, 100_000):
         out[f"taper_{n}"] = tapered_scene(n)
     for n in (100, 1000):
         bar = tapered_scene(n)
         out[f"walls_{n}"] = contactqp.wall_at_every_node(bar, 1e-5 * (1 + np.arange(n + 1) / n))
-    for name in ("several_bars", "two_bars"):
+    for name in ("several_bars", "two_bars", "held_by_contact"):
         out[name] = contactqp.load_scene(EXAMPLES / f"{name}.toml")
+    out["free_bar"] = free_bar()
+    out["free_bars"] = free_bars_between_walls()
     return out
+
+
+def free_bars_between_walls() -> contactqp.Scene:
+    """Two bars with no support (tests/test_floating.py::test_two_bars_between_walls): bar 0,
+    1 kN at its node 1, between a "−" wall 0.2 mm before its node 0 and a contact 0.05 mm from
+    its node 4 to bar 1's node 0; bar 1, −300 N at its node 2, against a "+" wall 0.1 mm beyond
+    its node 4. Both are pushed to the "+" wall: it carries 700 N, the contact 1 kN, the "−"
+    wall nothing."""
+    bar = contactqp.Bar.from_areas([1e-3, 5e-4, 2e-4, 1e-4], 200e9, length=1.0)
+    return contactqp.Scene(
+        (bar, bar), (), (contactqp.Load(1, 1e3, 0), contactqp.Load(2, -3e2, 1)),
+        (contactqp.Wall(0, 2e-4, "-", 0), contactqp.Wall(4, 1e-4, "+", 1)),
+        contacts=(contactqp.BarContact(0, 4, 1, 0, 5e-5),), name="two free bars")
 
 
 def save(path: Path, P, q: np.ndarray, G, h: np.ndarray) -> None:
