@@ -9,10 +9,10 @@ G x <= h, x the free nodes' displacements (SI: in m; scaled: in units of U), P =
 G = C, h = g (P positive definite; only semidefinite where a bar has no support and is held by
 its contacts alone: the free_bar, held_by_contact and free_bars problems, scaled from K with a
 spring per free bar as the library scales them). Its duals z (qpsolvers' convention for
-G x <= h) are the contact forces: λ = z (SI, N) or λ = F·z (scaled). exact.json holds, per problem, the exact duals (from
-contactqp.reference: statics in extended precision or rational arithmetic, never a solver),
-the scales U and F, and the scene's file so that a solution can be checked
-(benchmarks/qpbenchmark/compare.py).
+G x <= h) are the contact forces: λ = z (SI, N) or λ = F·z (scaled). exact.json holds, per
+problem, the exact duals (from contactqp.reference: statics in extended precision or rational
+arithmetic, never a solver), the scales U and F, and the scene's file so that a solution can be
+checked (benchmarks/qpbenchmark/compare.py).
 """
 
 from __future__ import annotations
