@@ -98,3 +98,17 @@ def test_every_public_class_documents_what_it_takes(cls):
         return
     fields = [f.name for f in dataclasses.fields(cls) if f.init]
     assert documented(found.get("Parameters", [])) == fields
+
+
+def test_the_readme_example_prints_what_the_readme_shows():
+    """The README's example output is pasted in: it must be what the example prints today
+    (the time on the method's line aside, which changes from run to run)."""
+    text = README.read_text(encoding="utf-8")
+    example = re.search(r"print\(result\.summary\(\)\)\n```\n\n```\n(.*?)```", text, re.DOTALL)
+    assert example, "the README's example and its output are not where this test looks"
+    assert untimed(example.group(1)) == untimed(contactqp.solve().summary())
+
+
+def untimed(summary: str) -> str:
+    """A summary with the time on its method line left out."""
+    return re.sub(r", [0-9.]+ ms$", ", … ms", summary.strip(), flags=re.MULTILINE)
