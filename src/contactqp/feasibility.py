@@ -326,16 +326,9 @@ def unheld_bars(scene: Scene, contact: str = "inequality") -> str:
     ground = len(floating)
     ahead = [0] * (ground + 1)  # bit masks: what blocks each bar's move in +x (ground: last)
     both_ways = contact == "equality"
-    for wall in scene.walls:
-        if wall.bar in place:
-            i = place[wall.bar]
-            if wall.side == "+" or both_ways:
-                ahead[i] |= 1 << ground
-            if wall.side == "-" or both_ways:
-                ahead[ground] |= 1 << i
-    for c in scene.contacts:
-        a, b = place.get(c.bar_a, ground), place.get(c.bar_b, ground)
-        ahead[a] |= 1 << b  # u_a − u_b <= gap: bar b stops bar a moving in +x
+    for a, b in zip(*scene.layout.row_bars):  # the row stops bar a moving towards b in +x
+        a, b = place.get(int(a), ground), place.get(int(b), ground)
+        ahead[a] |= 1 << b
         if both_ways:
             ahead[b] |= 1 << a
     behind = [sum(1 << j for j in range(ground + 1) if ahead[j] >> i & 1)

@@ -45,21 +45,10 @@ def pinning(model: Model) -> Callable[[np.ndarray], np.ndarray]:
         return lambda active: active
     layout, scene = model.layout, model.scene
     bars = len(scene.bars)
-    ground = bars  # the supports and the walls (bar_groups)
-    supported = {s.bar for s in scene.supports}
     net = layout.bar_loads
-    # per row: the bar it stops moving in +x and the bar it stops moving in −x (−1: none)
-    n_walls = len(scene.walls)
-    ahead = np.full(model.n_contacts, -1)
-    behind = np.full(model.n_contacts, -1)
-    ends = np.full((model.n_contacts, 2), ground)
-    for i, wall in enumerate(scene.walls):
-        (ahead if wall.side == "+" else behind)[i] = wall.bar
-        ends[i, 0] = wall.bar
-    for i, c in enumerate(scene.contacts):
-        ahead[n_walls + i], behind[n_walls + i] = c.bar_a, c.bar_b
-        ends[n_walls + i] = c.bar_a, c.bar_b
-    ends[np.isin(ends, list(supported))] = ground
+    ahead, behind = layout.row_bars  # per row: the bars it stops in +x and in −x (−1: none)
+    ends = np.column_stack((ahead, behind))
+    ends[ends < 0] = bars  # a wall's fixed side: the ground (bar_groups' last vertex)
 
     def pin(active: np.ndarray) -> np.ndarray:
         active = np.array(active, dtype=bool)

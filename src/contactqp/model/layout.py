@@ -36,7 +36,7 @@ TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_positio
             "element_bar_ends", "opposed_entries", "support_mask", "junctions",
             "element_stiffness", "areas", "yield_stress", "compliance", "chained_compliance",
             "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes",
-            "longest_bar", "row_compliance")
+            "longest_bar", "row_compliance", "row_bars")
 
 
 def _gaps(scene: Scene) -> np.ndarray:
@@ -88,6 +88,20 @@ class Layout:
         if len(self.scene.bars) == 1:
             return np.zeros(np.shape(nodes), dtype=np.intp)
         return self.node_bar[nodes]
+
+    @cached_property
+    def row_bars(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per contact row, (the bar it stops moving in +x, the bar it stops moving in −x),
+        −1 for the ground (a wall's fixed side): a "+" wall on bar w is (w, −1), a "−" wall
+        (−1, w), a bar contact from a to b (a, b) (u_a − u_b <= g stops a moving towards b in
+        +x, and b towards a in −x)."""
+        scene = self.scene
+        ahead = [w.bar if w.side == "+" else -1 for w in scene.walls]
+        behind = [w.bar if w.side == "-" else -1 for w in scene.walls]
+        ahead += [c.bar_a for c in scene.contacts]
+        behind += [c.bar_b for c in scene.contacts]
+        return (_read_only(np.array(ahead, dtype=np.intp)),
+                _read_only(np.array(behind, dtype=np.intp)))
 
     @cached_property
     def bar_loads(self) -> np.ndarray:
@@ -549,14 +563,10 @@ def bar_groups(scene: Scene, rows: np.ndarray) -> np.ndarray:
     from scipy.sparse.csgraph import connected_components
 
     bars = len(scene.bars)
-    n_walls = len(scene.walls)
-    ends = [(s.bar, bars) for s in scene.supports]
-    for i in np.flatnonzero(rows):
-        if i < n_walls:
-            ends.append((scene.walls[i].bar, bars))
-        else:
-            contact = scene.contacts[i - n_walls]
-            ends.append((contact.bar_a, contact.bar_b))
-    a, b = np.array(ends, dtype=np.intp).reshape(-1, 2).T
+    ahead, behind = scene.layout.row_bars
+    supported = np.array([s.bar for s in scene.supports], dtype=np.intp)
+    a = np.concatenate((supported, ahead[rows]))
+    b = np.concatenate((np.full(supported.size, bars), behind[rows]))
+    a[a < 0], b[b < 0] = bars, bars  # a wall's fixed side: the ground
     graph = sp.coo_array((np.ones(a.size), (a, b)), shape=(bars + 1, bars + 1))
     return connected_components(graph, directed=False)[1]
