@@ -252,7 +252,7 @@ def _contact_give(layout: Layout, held: np.ndarray, pushing: np.ndarray) -> floa
 def unpinned_bar(layout: Layout, pushing: np.ndarray) -> int | None:
     """A bar with no support that the ``pushing`` rows do not join to a support or a wall
     (through other bars), or None: nothing in the answer fixes where such a bar is."""
-    if len({s.bar for s in layout.scene.supports}) == len(layout.scene.bars):
+    if not layout.floating_bars.size:
         return None
     labels = bar_groups(layout.scene, pushing)
     loose = np.flatnonzero(labels[:-1] != labels[-1])

@@ -315,8 +315,8 @@ def unheld_bars(scene: Scene, contact: str = "inequality") -> str:
     them; such scenes are refused too). Every subset of up to :data:`MAX_FLOATING_BARS` bars is tried; the moves
     of sets are exactly the directions in which the energy has no minimum (order-preserving
     moves are sums of such sets' moves)."""
-    supported = {s.bar for s in scene.supports}
-    floating = [b for b in range(len(scene.bars)) if b not in supported]
+    layout = scene.layout
+    floating = layout.floating_bars.tolist()
     if not floating:
         return ""
     if len(floating) > MAX_FLOATING_BARS:
@@ -326,14 +326,13 @@ def unheld_bars(scene: Scene, contact: str = "inequality") -> str:
     ground = len(floating)
     ahead = [0] * (ground + 1)  # bit masks: what blocks each bar's move in +x (ground: last)
     both_ways = contact == "equality"
-    for a, b in zip(*scene.layout.row_bars):  # the row stops bar a moving towards b in +x
+    for a, b in zip(*layout.row_bars):  # the row stops bar a moving towards b in +x
         a, b = place.get(int(a), ground), place.get(int(b), ground)
         ahead[a] |= 1 << b
         if both_ways:
             ahead[b] |= 1 << a
     behind = [sum(1 << j for j in range(ground + 1) if ahead[j] >> i & 1)
               for i in range(ground + 1)]
-    layout = scene.layout
     net = layout.bar_loads[floating].tolist()
     size = np.add.reduceat(np.abs(layout.nodal_loads), layout.node_offsets[:-1])[floating].tolist()
     for subset in sorted(range(1, 1 << ground), key=lambda m: (m.bit_count(), m)):

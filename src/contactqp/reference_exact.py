@@ -129,7 +129,7 @@ class _ExactScene:
                    [Fraction(k) for k in layout.link_stiffness.tolist()],
                    [Fraction(p) for p in layout.nodal_loads.tolist()],
                    [tuple(r) for r in rows], [Fraction(g) for g in gaps.tolist()],
-                   len({s.bar for s in scene.supports}) < len(scene.bars))
+                   bool(layout.floating_bars.size))
 
     def edge(self, r: int) -> tuple[int, int]:
         """Row r as an edge (tail, head) of the graph of rows, row r = e_head − e_tail: a "+"

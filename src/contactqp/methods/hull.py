@@ -25,10 +25,12 @@ hands over to the textbook loop from the set reached (reported in the Solution's
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
-from contactqp.model import Model, count_up_to, run_ends, run_starts, spread
+from contactqp.model import Condensed, Model, count_up_to, run_ends, run_starts, spread
 from contactqp.result import Solution
 
 
@@ -173,6 +175,21 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
     if clip < 0 and slope[-1] < 0.0:  # the minorant falls to the last point: its lowest
         vertices = np.append(vertices, x.size - 1)
     return vertices
+
+
+def solve_on_chain(model: Model | Condensed, contact: str, max_iterations: int | None = None
+                   ) -> tuple[Solution | None, np.ndarray] | None:
+    """:func:`solve_hull` on ``model``'s chain (a condensed model's full one, its loads as the
+    condensed model scales them), or None where the hull does not apply (:func:`applies`).
+    The Solution, if one is found, is in ``model``'s unknowns."""
+    chain = model.full if isinstance(model, Condensed) else model
+    if not applies(chain, contact):
+        return None
+    factor = model.load_factor if isinstance(model, Condensed) else 1.0
+    solution, reached = solve_hull(chain, max_iterations=max_iterations, load_factor=factor)
+    if solution is not None and chain is not model:  # the condensed unknowns: contact nodes' u
+        solution = replace(solution, u_free=solution.u_free[model.nodes])
+    return solution, reached
 
 
 def solve_hull(model: Model, *, max_iterations: int | None = None, load_factor: float = 1.0

@@ -13,8 +13,6 @@ same contact problem, up to LEMKE_LIMIT rows.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import scipy.sparse as sp
 
@@ -181,14 +179,11 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
         return independent_rows(C, kept, np.flatnonzero(~active & (pen > disp_tol)), pen, lam)
 
     start, info = None, _strain_info(element_force)
-    chain = model.full if isinstance(model, Condensed) else model  # the hull works on the chain
-    if active_set == "hull" and formulation == "full" and hull.applies(chain, contact):
-        factor = model.load_factor if isinstance(model, Condensed) else 1.0
-        solution, start = hull.solve_hull(chain, max_iterations=max_iterations,
-                                          load_factor=factor)
+    found = (hull.solve_on_chain(model, contact, max_iterations)
+             if active_set == "hull" and formulation == "full" else None)
+    if found is not None:
+        solution, start = found
         if solution is not None:
-            if chain is not model:  # the condensed unknowns are the contact nodes' u
-                solution = replace(solution, u_free=solution.u_free[model.nodes])
             return solution
         info = {"active_set": "hull, then passed (the hull's set came back)"}
     reason = None

@@ -72,9 +72,8 @@ def hull_start(model: Model | Condensed) -> np.ndarray | None:
     10³ walls, 5000 on 10⁴ (measured); from the hull's set it settles in a few, at the same
     answer (the penalised energy is strictly convex: its minimum is the loop's one fixed
     point)."""
-    chain = model.full if isinstance(model, Condensed) else model
-    if not hull.applies(chain, "inequality"):
+    found = hull.solve_on_chain(model, "inequality")
+    if found is None:
         return None
-    factor = model.load_factor if isinstance(model, Condensed) else 1.0
-    found, reached = hull.solve_hull(chain, load_factor=factor)
-    return found.contact_force > 0.0 if found is not None else reached
+    solution, reached = found
+    return solution.contact_force > 0.0 if solution is not None else reached

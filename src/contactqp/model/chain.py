@@ -90,10 +90,8 @@ class Model:
 
     @cached_property
     def floating(self) -> tuple[int, ...]:
-        """The bars with no support, held only by their walls and bar contacts (K is then
-        only positive semidefinite: each such bar can move as a whole)."""
-        supported = {s.bar for s in self.scene.supports}
-        return tuple(b for b in range(len(self.scene.bars)) if b not in supported)
+        """The bars with no support (:attr:`Layout.floating_bars`)."""
+        return tuple(self.layout.floating_bars.tolist())
 
     @cached_property
     def held(self) -> Model:
@@ -118,7 +116,7 @@ class Model:
         """When every bar is held by exactly one support (statically determinate): per bar,
         the slice of its free nodes and the support's position in that slice. Else None."""
         scene = self.scene
-        if sorted(s.bar for s in scene.supports) != list(range(len(scene.bars))):
+        if len(scene.supports) != len(scene.bars) or self.layout.floating_bars.size:
             return None
         first = np.searchsorted(self.free, self.layout.node_offsets)
         return tuple((slice(int(first[b]), int(first[b + 1])), support)

@@ -36,7 +36,7 @@ TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_positio
             "element_bar_ends", "opposed_entries", "support_mask", "junctions",
             "element_stiffness", "areas", "yield_stress", "compliance", "chained_compliance",
             "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes",
-            "longest_bar", "row_compliance", "row_bars")
+            "longest_bar", "row_compliance", "row_bars", "floating_bars")
 
 
 def _gaps(scene: Scene) -> np.ndarray:
@@ -310,6 +310,14 @@ class Layout:
             xs.append(start + b.node_x)
             start = float(xs[-1][-1])
         return _read_only(np.concatenate(xs))
+
+    @cached_property
+    def floating_bars(self) -> np.ndarray:
+        """The bars with no support, held only by their walls and bar contacts (K is then
+        only positive semidefinite: each such bar can move as a whole), in order."""
+        supported = np.zeros(len(self.scene.bars), dtype=bool)
+        supported[self.node_bar[self.support_nodes]] = True
+        return _read_only(np.flatnonzero(~supported))
 
     @cached_property
     def support_nodes(self) -> np.ndarray:
