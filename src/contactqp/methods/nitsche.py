@@ -13,7 +13,12 @@ K u = P, per wall,
 
 θ = 1 (symmetric; needs γ₀ large enough), 0, or −1 (skew-symmetric; stable for every γ₀). The
 system is piecewise linear: it is solved as a semismooth Newton iteration on the set of walls
-with P_γ < 0, each step one sparse solve, until the set repeats. The contact force is
+with P_γ < 0, each step one sparse solve, until the set repeats. On a scene with bars held
+only by contact a set may leave a bar free to move as a whole (every row that holds it off):
+its system is singular, and what a singular solve returns depends on the LAPACK build, so each
+set is first completed by the rows that stop such a bar in the direction of its load
+(:func:`~contactqp.methods._active_set.pinning`, as Lagrange's loop does) and no singular
+system is ever solved. The contact force is
 λ = −[P_γ(u)]₋ >= 0. Where the end node carries no load the answer is the exact discrete
 Signorini answer for every γ₀ (consistency: the element's force is the contact force there);
 a load at the end node (a distributed load's share) makes it differ by what γ₀ and θ decide,
@@ -30,6 +35,7 @@ import scipy.sparse as sp
 
 from contactqp import linalg
 from contactqp.errors import OptionError, SolverError
+from contactqp.methods._active_set import pinning
 from contactqp.model import Model
 from contactqp.result import Solution
 
@@ -97,6 +103,7 @@ def solve_nitsche(model: Model, contact: str, *, gamma0: float = DEFAULT_GAMMA0,
     gamma = gamma0 * k
     E = model.C  # the normal displacement u_n = C u (a wall: ν u_end; a contact: u_a − u_b)
     g = model.g
+    pin = pinning(model)  # a set that leaves a bar free gets the rows that stop it
     active = np.ones(model.n_contacts, dtype=bool)  # start in contact: the first step tells
     seen: set[bytes] = set()
     for iteration in range(1, max_iterations + 1):
@@ -120,10 +127,11 @@ def solve_nitsche(model: Model, contact: str, *, gamma0: float = DEFAULT_GAMMA0,
                               f"γ₀ = {gamma0:g} ({error}); a larger γ₀ or θ = −1 is stable"
                               ) from None
         trial = S @ u - gamma * (E @ u - g)  # P_γ(u)
-        following = (np.ones(model.n_contacts, dtype=bool) if contact == "equality"
-                     else trial < 0.0)
-        force = np.where(following, -trial, 0.0)
-        if np.array_equal(following, active):
+        pushing = (np.ones(model.n_contacts, dtype=bool) if contact == "equality"
+                   else trial < 0.0)
+        force = np.where(pushing, -trial, 0.0)
+        following = pin(pushing)
+        if np.array_equal(pushing, active):
             return Solution(u, force, solver="nitsche", iterations=iteration,
                             status="solved", info={"gamma0": gamma0, "theta": theta})
         key = following.tobytes()
