@@ -433,6 +433,8 @@ def test_the_complementarity_options_reach_their_methods(capsys):
 ])
 def test_the_solver_options_reach_the_result(capsys, argv, solver, options):
     """Each QP and tolerance option of solve arrives in the Result (its solver and options)."""
+    if options.get("solver") == "daqp":
+        pytest.importorskip("daqp", reason="daqp is an optional solver: pip install daqp")
     code, out, _ = run(capsys, "solve", *argv, "--json")
     data = json.loads(out)
     assert code == 0 and data["solver"] == solver and data["options"] == options

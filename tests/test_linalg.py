@@ -54,3 +54,12 @@ def test_a_singular_or_indefinite_matrix_is_a_solver_error():
         solve(sp.csr_array(-chain(10).toarray()), np.ones(10), spd=True)
     with pytest.raises(np.linalg.LinAlgError):
         solve_spd_band(np.array([[-1.0]]), np.ones(1))
+
+
+def test_a_one_by_one_system_is_solved_or_called_singular():
+    """A 1 x 1 system (a scene with one unknown): x = b / a for any a ≠ 0, indefinite too
+    (scipy's solve_banded before 1.15 indexed past such a band), and a = 0 is singular."""
+    np.testing.assert_allclose(solve(sp.csr_array([[-4.0]]), np.array([2.0])), [-0.5])
+    np.testing.assert_allclose(solve(sp.csr_array([[4.0]]), np.array([2.0]), spd=True), [0.5])
+    with pytest.raises(SolverError, match="singular"):
+        solve(sp.csr_array([[0.0]]), np.array([1.0]))

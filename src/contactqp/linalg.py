@@ -56,8 +56,15 @@ def solve_spd_band(band: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     if band.shape[1] == 1:  # scipy's tridiagonal path (ptsv) rejects a 1 x 1 system
         if not band[0, 0] > 0.0:
             raise np.linalg.LinAlgError("1 x 1 matrix is not positive")
-        return np.asarray(rhs, dtype=float) / band[0, 0]
+        return _solve_one_by_one(band[0, 0], rhs)
     return _lapack().solveh_banded(band, rhs, lower=True, check_finite=False)
+
+
+def _solve_one_by_one(pivot: float, rhs: np.ndarray) -> np.ndarray:
+    """x = rhs / pivot, or numpy's LinAlgError where the 1 x 1 matrix is 0."""
+    if pivot == 0.0:
+        raise np.linalg.LinAlgError("1 x 1 matrix is 0")
+    return np.asarray(rhs, dtype=float) / pivot
 
 
 def symmetric_eigenvalues(matrix: np.ndarray) -> np.ndarray:
@@ -86,6 +93,8 @@ def solve(matrix: sp.sparray, rhs: np.ndarray, *, spd: bool = False,
     try:
         if max(lower, upper) <= MAX_BANDWIDTH and spd:
             x = solve_spd_band(_band_storage(sp.coo_array(sp.tril(coo)), lower, 0), rhs)
+        elif coo.shape[0] == 1:  # scipy before 1.15 misreads a 1 x 1 band in solve_banded
+            x = _solve_one_by_one(coo.toarray()[0, 0], rhs)
         elif max(lower, upper) <= MAX_BANDWIDTH:
             x = _lapack().solve_banded((lower, upper), _band_storage(coo, lower, upper), rhs,
                                        check_finite=False)
