@@ -4,8 +4,10 @@ nothing required would pass unseen."""
 
 import importlib.metadata
 import sys
+from pathlib import Path
 
-pins = [line.split("#")[0].strip().split("==") for line in open(sys.argv[1], encoding="utf-8")]
+lines = Path(sys.argv[1]).read_text(encoding="utf-8").splitlines()
+pins = [line.split("#")[0].strip().split("==") for line in lines]
 wrong = []
 for name, version in (pin for pin in pins if len(pin) == 2):
     try:
