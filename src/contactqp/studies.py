@@ -15,7 +15,7 @@ from contactqp.builders import (
     DEFAULT_MODULUS,
     default_scene,
 )
-from contactqp.errors import ContactqpError, SceneError
+from contactqp.errors import ContactqpError, OptionError, SceneError
 from contactqp.methods import CONTACT_KINDS
 from contactqp.methods.penalty import TEXTBOOK_PENALTY
 from contactqp.methods.qp import available_qp_solvers
@@ -24,6 +24,7 @@ from contactqp.reference import reference
 from contactqp.result import Result, plain
 from contactqp.scene import Load, Scene
 from contactqp.solve import as_scene, solve
+from contactqp.values import positive_values
 
 ROUND_OFF = 1e-12  # relative: a force error (of the force) or a force (of F) below it is round-off
 SWEEP_PENALTIES = (1.0,) + tuple(10.0 ** k for k in range(5, 21))  # N/m: 1, 1e5, 1e6 … 1e20
@@ -335,7 +336,8 @@ def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | Non
         The Lagrange solution the sweep compares with cannot be computed.
     """
     scene = as_scene(scene)
-    penalties = sweep_penalties(scene) if penalties is None else tuple(penalties)
+    penalties = sweep_penalties(scene) if penalties is None else positive_values(
+        "penalties", penalties, "ε, force per length", OptionError)
     reference = solve(scene, "lagrange", contact)
     runs, errors = _sweep_runs(scene, "penalty", penalties, contact, reference)
     augmented, augmented_errors = _sweep_runs(scene, "augmented", penalties, contact, reference)
