@@ -438,6 +438,93 @@ def test_the_solver_options_reach_the_result(capsys, argv, solver, options):
     assert code == 0 and data["solver"] == solver and data["options"] == options
 
 
+@pytest.mark.parametrize(("argv", "solver", "options"), [
+    (["--method", "nitsche", "--gamma0", "3", "--theta", "-1"], "nitsche",
+     {"gamma0": 3.0, "theta": -1.0}),
+    (["--method", "lagrange", "--active-set", "passed"], "lagrange", {"active_set": "passed"}),
+])
+def test_the_method_options_reach_the_result(capsys, argv, solver, options):
+    code, out, _ = run(capsys, "solve", *argv, "--json")
+    data = json.loads(out)
+    assert code == 0 and data["solver"] == solver and data["options"] == options
+
+
+def test_every_method_option_is_a_flag_of_solve():
+    """Whatever a user can pass to a method from Python, the command line can pass too."""
+    from contactqp.cli import parser
+    from contactqp.methods import METHODS
+
+    solve_parser = parser()._subparsers._group_actions[0].choices["solve"]
+    flags = {flag for action in solve_parser._actions for flag in action.option_strings}
+    wanted = {"--" + name.replace("_", "-") for m in METHODS.values() for name in m.options}
+    assert wanted - flags == set()
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["solve", "--method", "pgs", "--tolerance", "-1e-3"], ["tolerance", "-0.001"]),
+    (["solve", "--method", "penalty", "--penalty", "-1e6"], ["penalty", "-1000000.0"]),
+    (["solve", "--method", "penalty", "--penalty", "1e300"], ["penalty = 1e+300",
+                                                             "outside the range"]),
+    (["solve", "--method", "nitsche", "--gamma0", "1e300"], ["gamma0 = 1e+300"]),
+    (["solve", "--method", "nitsche", "--theta", "0.5"], ["theta must be one of 1, 0, -1"]),
+    (["curve", "--steps", "-5"], ["steps", "-5"]),
+])
+def test_a_negative_or_huge_number_reaches_its_check(capsys, argv, words):
+    """argparse read ``-1e-3`` as an option ("expected one argument"); each value now reaches
+    the check that names it, and 1e300 is out of range as a scene number would be."""
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    for word in words:
+        assert word in err
+
+
+@pytest.mark.parametrize(("out", "words"), [
+    ("/dev/null", ["--out '/dev/null'", "is a file, not a folder"]),
+    ("{file}", ["is a file, not a folder"]),
+    ("{file}/charts", ["is a file, not a folder"]),  # its parent is the file
+    ("/proc/contactqp-charts", ["--out '/proc/contactqp-charts'", "cannot be written"]),
+])
+@pytest.mark.parametrize("command", [[], ["compare"], ["penalty-sweep"], ["curve"], ["solve"]])
+def test_an_out_that_cannot_take_the_charts_is_refused_before_anything_runs(
+        capsys, monkeypatch, tmp_path, out, words, command):
+    """--out at a file or a place that cannot be written: exit 2 and one line naming it,
+    before the comparison (or any solve) runs; it was exit 3 after the whole comparison."""
+    from contactqp import cli
+
+    def never(*args, **kwargs):
+        raise AssertionError("ran before --out was checked")
+
+    for name in ("compare", "penalty_sweep", "solve", "as_scene"):
+        monkeypatch.setattr(cli, name, never)
+    file = tmp_path / "a_file"
+    file.write_text("")
+    code, printed, err = run(capsys, *command, "--out", out.replace("{file}", str(file)))
+    assert code == 2 and printed == "" and len(err.strip().splitlines()) == 1
+    for word in words:
+        assert word in err
+
+
+def test_an_out_with_missing_parents_is_made(capsys, tmp_path):
+    out = tmp_path / "not" / "yet" / "there"
+    assert main(["solve", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert (out / "bar.png").stat().st_size > 0
+
+
+def test_a_bad_scene_with_an_out_to_be_made_leaves_no_folder(capsys, tmp_path):
+    out = tmp_path / "charts" / "deep"
+    assert main(["compare", str(tmp_path / "missing.toml"), "--out", str(out)]) == 2
+    capsys.readouterr()
+    assert not (tmp_path / "charts").exists()
+
+
+def test_a_scene_file_with_units_as_a_list_exits_2(capsys, tmp_path):
+    path = tmp_path / "units.toml"
+    path.write_text("units = []\n" + "".join(GOOD.values()), encoding="utf-8")
+    code, _, err = run(capsys, "solve", str(path))
+    assert code == 2 and "units must be one of 'SI', 'mm-N-MPa', got []" in err
+
+
 def test_verbose_lets_the_solver_print(capfd):
     """--verbose: OSQP's banner on stdout (the solver's own C code); without it, silence."""
     assert main(["solve", "--method", "qp", "--backend", "osqp", "--verbose", "--json"]) == 0

@@ -13,12 +13,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
 from contactqp import __version__, formatting
-from contactqp.errors import ContactqpError
+from contactqp.errors import ContactqpError, OptionError
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
+from contactqp.methods.lagrange import ACTIVE_SETS
 from contactqp.report import detail_table, table
 from contactqp.result import Result
 from contactqp.scene import Scene, Units
@@ -107,7 +109,8 @@ def _qp_options(args: argparse.Namespace) -> dict[str, Any]:
 
 def command_solve(args: argparse.Namespace) -> int:
     options: dict[str, Any] = {}
-    for name in ("penalty", "relaxation", "ncp", "tolerance", "max_iterations"):
+    for name in ("penalty", "relaxation", "ncp", "tolerance", "max_iterations", "active_set",
+                 "gamma0", "theta"):
         if getattr(args, name) is not None:
             options[name] = getattr(args, name)
     options.update(_qp_options(args))
@@ -299,6 +302,14 @@ def parser() -> argparse.ArgumentParser:
                                    "λ), pgs and semismooth_newton (natural-map residual)")
     solve_parser.add_argument("--max-iterations", type=int, dest="max_iterations",
                               help="steps, sweeps or pivots at most (every method but qp)")
+    solve_parser.add_argument("--active-set", dest="active_set", choices=ACTIVE_SETS,
+                              help="method lagrange: the hull's active set (default where it "
+                                   "applies) or the rows passed, added one step at a time")
+    solve_parser.add_argument("--gamma0", type=float,
+                              help="γ₀ of method nitsche, γ = γ₀·EA/h (default 100)")
+    solve_parser.add_argument("--theta", type=float,
+                              help="θ of method nitsche: 1 (symmetric, the default), 0 or -1 "
+                                   "(skew-symmetric, stable for every γ₀)")
     solve_parser.add_argument("--backend", help="QP backend, method qp (see contactqp solvers)")
     solve_parser.add_argument("--solver", help="QP solver of the backend, method qp")
     solve_parser.add_argument("--accuracy", choices=("default", "high"), help="method qp")
@@ -326,9 +337,68 @@ def parser() -> argparse.ArgumentParser:
     return top
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = parser().parse_args(argv)
+NUMBER_OPTIONS = ("--penalty", "--relaxation", "--tolerance", "--max-iterations", "--gamma0",
+                  "--theta", "--steps")
+
+
+def _negative_numbers_joined(argv: list[str]) -> list[str]:
+    """``--tolerance -1e-3`` as ``--tolerance=-1e-3``: argparse reads a token that starts with
+    '-' and is not a plain decimal (-1e-3) as an option, and then says "expected one
+    argument"; joined, the value reaches its check, which names it."""
+    joined: list[str] = []
+    for token in argv:
+        if joined and joined[-1] in NUMBER_OPTIONS and token.startswith("-"):
+            try:
+                float(token)
+            except ValueError:
+                pass
+            else:
+                joined[-1] = f"{joined[-1]}={token}"
+                continue
+        joined.append(token)
+    return joined
+
+
+def _writes_charts(args: argparse.Namespace) -> bool:
+    if args.handler is command_solvers or getattr(args, "json", False):
+        return False
+    if args.handler is command_solve:  # solve draws only when given --out
+        return bool(getattr(args, "out", None)) and _charts_wanted(args)
+    return _charts_wanted(args)
+
+
+def _check_out(args: argparse.Namespace) -> None:
+    """Refuse, before anything runs, an --out that cannot take the charts (a file, a place
+    that cannot be written): found after the whole comparison, it was exit 3. The folders
+    made to try are removed again, so that bad input leaves nothing behind."""
+    if not _writes_charts(args):
+        return
+    folder = _out(args)
+    made = [p for p in (folder, *folder.parents) if not p.exists()]
     try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except (FileExistsError, NotADirectoryError):
+        file = next(p for p in (folder, *folder.parents) if p.exists())
+        raise OptionError(f"--out {str(folder)!r}: {str(file)!r} is a file, not a folder"
+                          ) from None
+    except OSError as error:
+        raise OptionError(f"--out {str(folder)!r}: the charts cannot be written there "
+                          f"({error.strerror})") from None
+    finally:
+        for path in made:  # deepest first
+            try:
+                path.rmdir()
+            except OSError:
+                pass
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = parser().parse_args(_negative_numbers_joined(argv))
+    try:
+        _check_out(args)
         return args.handler(args)
     except ContactqpError as error:
         print(f"contactqp: error: {error}", file=sys.stderr)
