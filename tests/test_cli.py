@@ -468,6 +468,7 @@ def test_every_method_option_is_a_flag_of_solve():
     (["solve", "--method", "nitsche", "--gamma0", "1e300"], ["gamma0 = 1e+300"]),
     (["solve", "--method", "nitsche", "--theta", "0.5"], ["theta must be one of 1, 0, -1"]),
     (["curve", "--steps", "-5"], ["steps", "-5"]),
+    (["curve", "--steps", "100000000"], ["steps = 100000000", "10000 times at most"]),
 ])
 def test_a_negative_or_huge_number_reaches_its_check(capsys, argv, words):
     """argparse read ``-1e-3`` as an option ("expected one argument"); each value now reaches
@@ -542,3 +543,17 @@ def test_penalty_sweep_contact_option(capsys):
                                                                        rel=1e-12)
     code, out, _ = run(capsys, "penalty-sweep", "--contact", "equality", "--no-charts")
     assert "equality contact" in out.splitlines()[0]
+
+
+@pytest.mark.parametrize("argv", [["curve", "--steps", "3"], ["penalty-sweep"], ["compare"]])
+def test_a_long_run_shows_its_progress_on_stderr(capsys, monkeypatch, argv):
+    """Past PROGRESS_AFTER seconds (here 0, so that no test waits) a run says on stderr how
+    far it is, and ends with "done"; the table on stdout is unchanged."""
+    from contactqp import cli
+
+    monkeypatch.setattr(cli, "PROGRESS_AFTER", 0.0)
+    code, out, err = run(capsys, *argv, "--no-charts")
+    assert code == 0 and out
+    lines = err.splitlines()
+    assert lines and all(line.startswith("contactqp: ") and " of " in line for line in lines)
+    assert lines[-1].endswith("done")

@@ -21,6 +21,7 @@ from contactqp import __version__, formatting
 from contactqp.errors import ContactqpError, OptionError
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.lagrange import ACTIVE_SETS
+from contactqp.progress import Report
 from contactqp.report import detail_table, table
 from contactqp.result import Result
 from contactqp.scene import Scene, Units
@@ -44,6 +45,14 @@ EXIT_CODES = {
 }
 STUDY_EXIT = ("exit status 0 when the table is produced, even where some runs fail their "
               "check: showing where each method fails is the point")
+
+
+PROGRESS_AFTER = 5.0  # s: a longer run shows its progress on stderr, a line a second
+
+
+def _progress(label: str) -> Report:
+    """Progress lines on stderr for a run that goes on past PROGRESS_AFTER seconds."""
+    return Report(f"contactqp: {label}", quiet=PROGRESS_AFTER)
 
 
 def _scene(path: str | None) -> Scene:
@@ -84,7 +93,7 @@ def _write_charts(result: Result, sweep: PenaltySweep, out: Path,
 
 def command_compare(args: argparse.Namespace) -> int:
     scene = _scene(args.scene)
-    runs = compare(scene)
+    runs = compare(scene, progress=_progress("compare, runs"))
     bars = f"{len(scene.bars)} bars, " if len(scene.bars) > 1 else ""
     contacts = f", {len(scene.contacts)} bar contact(s)" if scene.contacts else ""
     print(f"scene: {scene.name} ({bars}{scene.n_elements} elements, {len(scene.walls)} wall(s)"
@@ -93,7 +102,8 @@ def command_compare(args: argparse.Namespace) -> int:
     answers = [r.result for r in runs if r.result is not None]
     shown = next((r for r in answers if r.verified and r.physical), answers[0] if answers else None)
     if _charts_wanted(args) and shown is not None:
-        for path in _write_charts(shown, penalty_sweep(scene), _out(args), args.scene is None):
+        sweep = penalty_sweep(scene, progress=_progress("penalty sweep for the chart, solves"))
+        for path in _write_charts(shown, sweep, _out(args), args.scene is None):
             print(f"chart: {path}")
         if args.scene is not None:
             print("(Nitsche's γ₀ sweep and the mesh convergence study the default scene: "
@@ -167,7 +177,7 @@ def _sweep_row(eps: float, sweep: PenaltySweep, i: int) -> list[str]:
 
 def command_penalty_sweep(args: argparse.Namespace) -> int:
     scene = _scene(args.scene)
-    sweep = penalty_sweep(scene, contact=args.contact)
+    sweep = penalty_sweep(scene, contact=args.contact, progress=_progress("penalty sweep, solves"))
     if args.json:
         print(json.dumps(sweep.to_dict(), indent=2, allow_nan=False))
         return OK
@@ -198,7 +208,7 @@ def command_curve(args: argparse.Namespace) -> int:
     from contactqp.curve import first_contact_factor, load_path
 
     scene = _scene(args.scene)
-    path = load_path(scene, steps=args.steps)
+    path = load_path(scene, steps=args.steps, progress=_progress("load path, steps"))
     if args.json:
         print(json.dumps(path.to_dict(), indent=2))
         return OK
