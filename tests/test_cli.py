@@ -557,3 +557,19 @@ def test_a_long_run_shows_its_progress_on_stderr(capsys, monkeypatch, argv):
     lines = err.splitlines()
     assert lines and all(line.startswith("contactqp: ") and " of " in line for line in lines)
     assert lines[-1].endswith("done")
+
+
+def test_an_unloaded_bar_between_two_zero_gap_walls_is_solved_at_zero(capsys, tmp_path):
+    """Its place is forced (u = 0) though nothing presses it: exit 0, no contact force."""
+    path = tmp_path / "wedged.toml"
+    path.write_text("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\narea = 1e-4\n"
+                    "elements = 2\n[[wall]]\nnode = 2\ngap = 0.0\n[[wall]]\nnode = 2\n"
+                    "gap = 0.0\nside = \"-\"\n", encoding="utf-8")
+    code, out, _ = run(capsys, "solve", str(path), "--json")
+    data = json.loads(out)
+    assert code == 0 and data["u"] == [0.0, 0.0, 0.0] and data["contact_force"] == [0.0, 0.0]
+
+
+def test_an_empty_scene_path_exits_2_saying_so(capsys):
+    code, out, err = run(capsys, "solve", "")
+    assert code == 2 and out == "" and err == "contactqp: error: scene file path is empty ('')\n"
