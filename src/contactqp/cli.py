@@ -13,12 +13,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import tempfile
 from pathlib import Path
 from typing import Any
 
 from contactqp import __version__, formatting
-from contactqp.errors import ContactqpError, OptionError
+from contactqp.cli_input import check_out_folder, negative_numbers_joined
+from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.lagrange import ACTIVE_SETS
 from contactqp.progress import Report
@@ -351,24 +351,6 @@ NUMBER_OPTIONS = ("--penalty", "--relaxation", "--tolerance", "--max-iterations"
                   "--theta", "--steps")
 
 
-def _negative_numbers_joined(argv: list[str]) -> list[str]:
-    """``--tolerance -1e-3`` as ``--tolerance=-1e-3``: argparse reads a token that starts with
-    '-' and is not a plain decimal (-1e-3) as an option, and then says "expected one
-    argument"; joined, the value reaches its check, which names it."""
-    joined: list[str] = []
-    for token in argv:
-        if joined and joined[-1] in NUMBER_OPTIONS and token.startswith("-"):
-            try:
-                float(token)
-            except ValueError:
-                pass
-            else:
-                joined[-1] = f"{joined[-1]}={token}"
-                continue
-        joined.append(token)
-    return joined
-
-
 def _writes_charts(args: argparse.Namespace) -> bool:
     if args.handler is command_solvers or getattr(args, "json", False):
         return False
@@ -377,38 +359,12 @@ def _writes_charts(args: argparse.Namespace) -> bool:
     return _charts_wanted(args)
 
 
-def _check_out(args: argparse.Namespace) -> None:
-    """Refuse, before anything runs, an --out that cannot take the charts (a file, a place
-    that cannot be written): found after the whole comparison, it was exit 3. The folders
-    made to try are removed again, so that bad input leaves nothing behind."""
-    if not _writes_charts(args):
-        return
-    folder = _out(args)
-    made = [p for p in (folder, *folder.parents) if not p.exists()]
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=folder):
-            pass
-    except (FileExistsError, NotADirectoryError):
-        file = next(p for p in (folder, *folder.parents) if p.exists())
-        raise OptionError(f"--out {str(folder)!r}: {str(file)!r} is a file, not a folder"
-                          ) from None
-    except OSError as error:
-        raise OptionError(f"--out {str(folder)!r}: the charts cannot be written there "
-                          f"({error.strerror})") from None
-    finally:
-        for path in made:  # deepest first
-            try:
-                path.rmdir()
-            except OSError:
-                pass
-
-
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    args = parser().parse_args(_negative_numbers_joined(argv))
+    args = parser().parse_args(negative_numbers_joined(argv, NUMBER_OPTIONS))
     try:
-        _check_out(args)
+        if _writes_charts(args):  # before anything runs: found after, it was exit 3
+            check_out_folder(_out(args))
         return args.handler(args)
     except ContactqpError as error:
         print(f"contactqp: error: {error}", file=sys.stderr)
