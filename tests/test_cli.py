@@ -573,3 +573,12 @@ def test_an_unloaded_bar_between_two_zero_gap_walls_is_solved_at_zero(capsys, tm
 def test_an_empty_scene_path_exits_2_saying_so(capsys):
     code, out, err = run(capsys, "solve", "")
     assert code == 2 and out == "" and err == "contactqp: error: scene file path is empty ('')\n"
+
+
+def test_a_scene_file_that_starts_with_a_byte_order_mark_is_read(capsys, tmp_path):
+    """Some editors write a UTF-8 byte-order mark: it was "Invalid statement (line 1,
+    column 1)" with no word of the mark."""
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + "".join(GOOD.values()).encode("utf-8"))
+    code, _, err = run(capsys, "solve", str(path))
+    assert code == 0 and err == ""

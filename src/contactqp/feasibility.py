@@ -375,15 +375,19 @@ def wedged_bars(scene: Scene) -> frozenset[int]:
         return frozenset()
     loaded = np.add.reduceat(np.abs(layout.nodal_loads), layout.node_offsets[:-1]) > 0.0
     touched = {c.bar_a for c in scene.contacts} | {c.bar_b for c in scene.contacts}
+    candidates = sorted(b for b in floating - touched if not loaded[b])
+    if not candidates:
+        return frozenset()
+    bar = np.fromiter((w.bar for w in scene.walls), np.intp, len(scene.walls))
+    plus = np.fromiter((w.side == "+" for w in scene.walls), bool, len(scene.walls))
+    gap = np.fromiter((w.gap for w in scene.walls), float, len(scene.walls))
     wedged = []
-    for b in sorted(floating - touched):
-        gaps = {side: [w.gap for w in scene.walls if w.bar == b and w.side == side]
-                for side in "+-"}
-        if loaded[b] or not (gaps["+"] and gaps["-"]):
-            continue
-        room = min(gaps["+"]) + min(gaps["-"])
-        if abs(room) <= 1e-12 * max(abs(min(gaps["+"])), abs(min(gaps["-"]))):
-            wedged.append(b)
+    for b in candidates:
+        ahead, behind = gap[(bar == b) & plus], gap[(bar == b) & ~plus]
+        if ahead.size and behind.size:
+            g_plus, g_minus = float(ahead.min()), float(behind.min())
+            if abs(g_plus + g_minus) <= 1e-12 * max(abs(g_plus), abs(g_minus)):
+                wedged.append(b)
     return frozenset(wedged)
 
 
