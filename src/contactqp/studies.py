@@ -42,8 +42,8 @@ def study_size(scene: Scene, study: str) -> Scene:
     SceneError, before anything is solved."""
     if scene.n_elements > MAX_STUDY_ELEMENTS:
         raise SceneError(f"bar: the scene has {scene.n_elements} elements; {study} keeps every "
-                         f"run's answer and takes at most {MAX_STUDY_ELEMENTS} (5 GB): solve it "
-                         "by one method (contactqp solve), or with fewer elements")
+                         f"run's answer in memory and takes at most {MAX_STUDY_ELEMENTS}: solve "
+                         "it by one method (contactqp solve), or with fewer elements")
     return scene
 
 
@@ -369,7 +369,7 @@ def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | Non
     SolverError
         The Lagrange solution the sweep compares with cannot be computed.
     """
-    scene = study_size(as_scene(scene), "penalty_sweep")
+    scene = study_size(as_scene(scene), "the penalty sweep")
     penalties = sweep_penalties(scene) if penalties is None else positive_values(
         "penalties", penalties, "ε, force per length", OptionError)
     advance = counter(as_progress(progress, "penalty sweep"), 2 * len(penalties))
