@@ -182,3 +182,28 @@ def test_a_tiled_scene_is_its_copies_side_by_side():
                                                for s in scene.supports]
     assert [(c.bar_a, c.bar_b) for c in tiled.contacts] == [
         (c.bar_a + k * n, c.bar_b + k * n) for k in range(3) for c in scene.contacts]
+
+
+@pytest.mark.parametrize("method", ["lagrange", "pgs"])
+def test_a_batch_tells_its_progress_when_asked(method):
+    """Solved case by case (pgs), after each case; solved together (lagrange), at the end:
+    the last call is always (cases, cases), and nothing counts down."""
+    seen = []
+    forces = np.linspace(0.5, 1.5, 4)[:, None] * DEFAULT_F
+    contactqp.prepare(method=method).solve_many(forces,
+                                                progress=lambda d, t: seen.append((d, t)))
+    assert seen[-1] == (4, 4)
+    assert [d for d, _ in seen] == sorted({d for d, _ in seen})
+    if method == "pgs":
+        assert seen == [(1, 4), (2, 4), (3, 4), (4, 4)]
+
+
+def test_a_batch_larger_than_a_scene_may_be_is_refused_up_front():
+    """The default scene has 4 elements: 10⁷ / 4 cases at most, said before any solve."""
+    prepared = contactqp.prepare(method="pgs")
+    with pytest.raises(contactqp.OptionError, match=r"2500001 cases of 4 elements; a batch "
+                                                    r"takes at most 2500000"):
+        prepared.solve_many(np.ones((2_500_001, 1)))
+    with pytest.raises(contactqp.OptionError, match=r"progress must be True, False or a "
+                                                    r"callable .* got 'yes'"):
+        prepared.solve_many(progress="yes")

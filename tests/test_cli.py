@@ -440,6 +440,94 @@ def test_the_solver_options_reach_the_result(capsys, argv, solver, options):
     assert code == 0 and data["solver"] == solver and data["options"] == options
 
 
+@pytest.mark.parametrize(("argv", "solver", "options"), [
+    (["--method", "nitsche", "--gamma0", "3", "--theta", "-1"], "nitsche",
+     {"gamma0": 3.0, "theta": -1.0}),
+    (["--method", "lagrange", "--active-set", "passed"], "lagrange", {"active_set": "passed"}),
+])
+def test_the_method_options_reach_the_result(capsys, argv, solver, options):
+    code, out, _ = run(capsys, "solve", *argv, "--json")
+    data = json.loads(out)
+    assert code == 0 and data["solver"] == solver and data["options"] == options
+
+
+def test_every_method_option_is_a_flag_of_solve():
+    """Whatever a user can pass to a method from Python, the command line can pass too."""
+    from contactqp.cli import parser
+    from contactqp.methods import METHODS
+
+    solve_parser = parser()._subparsers._group_actions[0].choices["solve"]
+    flags = {flag for action in solve_parser._actions for flag in action.option_strings}
+    wanted = {"--" + name.replace("_", "-") for m in METHODS.values() for name in m.options}
+    assert wanted - flags == set()
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["solve", "--method", "pgs", "--tolerance", "-1e-3"], ["tolerance", "-0.001"]),
+    (["solve", "--method", "penalty", "--penalty", "-1e6"], ["penalty", "-1000000.0"]),
+    (["solve", "--method", "penalty", "--penalty", "1e300"], ["penalty = 1e+300",
+                                                             "outside the range"]),
+    (["solve", "--method", "nitsche", "--gamma0", "1e300"], ["gamma0 = 1e+300"]),
+    (["solve", "--method", "nitsche", "--theta", "0.5"], ["theta must be one of 1, 0, -1"]),
+    (["curve", "--steps", "-5"], ["steps", "-5"]),
+    (["curve", "--steps", "100000000"], ["steps = 100000000", "10000 times at most"]),
+])
+def test_a_negative_or_huge_number_reaches_its_check(capsys, argv, words):
+    """argparse read ``-1e-3`` as an option ("expected one argument"); each value now reaches
+    the check that names it, and 1e300 is out of range as a scene number would be."""
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    for word in words:
+        assert word in err
+
+
+@pytest.mark.parametrize(("out", "words"), [
+    ("/dev/null", ["--out '/dev/null'", "is a file, not a folder"]),
+    ("{file}", ["is a file, not a folder"]),
+    ("{file}/charts", ["is a file, not a folder"]),  # its parent is the file
+    ("/proc/contactqp-charts", ["--out '/proc/contactqp-charts'", "cannot be written"]),
+])
+@pytest.mark.parametrize("command", [[], ["compare"], ["penalty-sweep"], ["curve"], ["solve"]])
+def test_an_out_that_cannot_take_the_charts_is_refused_before_anything_runs(
+        capsys, monkeypatch, tmp_path, out, words, command):
+    """--out at a file or a place that cannot be written: exit 2 and one line naming it,
+    before the comparison (or any solve) runs; it was exit 3 after the whole comparison."""
+    from contactqp import cli
+
+    def never(*args, **kwargs):
+        raise AssertionError("ran before --out was checked")
+
+    for name in ("compare", "penalty_sweep", "solve", "as_scene"):
+        monkeypatch.setattr(cli, name, never)
+    file = tmp_path / "a_file"
+    file.write_text("")
+    code, printed, err = run(capsys, *command, "--out", out.replace("{file}", str(file)))
+    assert code == 2 and printed == "" and len(err.strip().splitlines()) == 1
+    for word in words:
+        assert word in err
+
+
+def test_an_out_with_missing_parents_is_made(capsys, tmp_path):
+    out = tmp_path / "not" / "yet" / "there"
+    assert main(["solve", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert (out / "bar.png").stat().st_size > 0
+
+
+def test_a_bad_scene_with_an_out_to_be_made_leaves_no_folder(capsys, tmp_path):
+    out = tmp_path / "charts" / "deep"
+    assert main(["compare", str(tmp_path / "missing.toml"), "--out", str(out)]) == 2
+    capsys.readouterr()
+    assert not (tmp_path / "charts").exists()
+
+
+def test_a_scene_file_with_units_as_a_list_exits_2(capsys, tmp_path):
+    path = tmp_path / "units.toml"
+    path.write_text("units = []\n" + "".join(GOOD.values()), encoding="utf-8")
+    code, _, err = run(capsys, "solve", str(path))
+    assert code == 2 and "units must be one of 'SI', 'mm-N-MPa', got []" in err
+
+
 def test_verbose_lets_the_solver_print(capfd):
     """--verbose: OSQP's banner on stdout (the solver's own C code); without it, silence."""
     assert main(["solve", "--method", "qp", "--backend", "osqp", "--verbose", "--json"]) == 0
@@ -457,3 +545,42 @@ def test_penalty_sweep_contact_option(capsys):
                                                                        rel=1e-12)
     code, out, _ = run(capsys, "penalty-sweep", "--contact", "equality", "--no-charts")
     assert "equality contact" in out.splitlines()[0]
+
+
+@pytest.mark.parametrize("argv", [["curve", "--steps", "3"], ["penalty-sweep"], ["compare"]])
+def test_a_long_run_shows_its_progress_on_stderr(capsys, monkeypatch, argv):
+    """Past PROGRESS_AFTER seconds (here 0, so that no test waits) a run says on stderr how
+    far it is, and ends with "done"; the table on stdout is unchanged."""
+    from contactqp import cli
+
+    monkeypatch.setattr(cli, "PROGRESS_AFTER", 0.0)
+    code, out, err = run(capsys, *argv, "--no-charts")
+    assert code == 0 and out
+    lines = err.splitlines()
+    assert lines and all(line.startswith("contactqp: ") and " of " in line for line in lines)
+    assert lines[-1].endswith("done")
+
+
+def test_an_unloaded_bar_between_two_zero_gap_walls_is_solved_at_zero(capsys, tmp_path):
+    """Its place is forced (u = 0) though nothing presses it: exit 0, no contact force."""
+    path = tmp_path / "wedged.toml"
+    path.write_text("[material]\nyoungs_modulus = 2e11\n[bar]\nlength = 1.0\narea = 1e-4\n"
+                    "elements = 2\n[[wall]]\nnode = 2\ngap = 0.0\n[[wall]]\nnode = 2\n"
+                    "gap = 0.0\nside = \"-\"\n", encoding="utf-8")
+    code, out, _ = run(capsys, "solve", str(path), "--json")
+    data = json.loads(out)
+    assert code == 0 and data["u"] == [0.0, 0.0, 0.0] and data["contact_force"] == [0.0, 0.0]
+
+
+def test_an_empty_scene_path_exits_2_saying_so(capsys):
+    code, out, err = run(capsys, "solve", "")
+    assert code == 2 and out == "" and err == "contactqp: error: scene file path is empty ('')\n"
+
+
+def test_a_scene_file_that_starts_with_a_byte_order_mark_is_read(capsys, tmp_path):
+    """Some editors write a UTF-8 byte-order mark: it was "Invalid statement (line 1,
+    column 1)" with no word of the mark."""
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + "".join(GOOD.values()).encode("utf-8"))
+    code, _, err = run(capsys, "solve", str(path))
+    assert code == 0 and err == ""

@@ -74,3 +74,25 @@ def test_a_method_that_cannot_hold_the_scene_is_named_and_the_others_are_drawn()
     lagrange = path.methods["lagrange"]
     assert lagrange.contact_force[-1] == pytest.approx([F - k * g, 0.0], rel=1e-10, abs=1e-6)
     assert lagrange.verified.all() and lagrange.physical.all()
+
+
+@pytest.mark.parametrize(("scene", "steps", "message"), [
+    (None, 10**8, r"^steps = 100000000: contactqp steps a load path 10000 times at most$"),
+    (None, 10_001, r"^steps = 10001: .* 10000 times at most$"),
+    (contactqp.default_scene(500_000), 21,
+     r"^steps = 21: a scene of 500000 elements is stepped 20 times at most \(10000000 "),
+])
+def test_a_load_path_that_could_not_finish_is_refused_with_its_limit(scene, steps, message):
+    """10⁵ steps took 586 s and 10⁸ had no bound; a big scene's steps are one batch of
+    steps times its elements."""
+    with pytest.raises(contactqp.OptionError, match=message):
+        load_path(scene, steps=steps)
+
+
+def test_a_load_path_tells_its_progress_over_every_method():
+    seen = []
+    path = load_path(steps=3, progress=lambda done, total: seen.append((done, total)))
+    total = 3 * (len(path.methods) + len(path.failed))
+    assert seen[-1] == (total, total)
+    assert all(t == total for _, t in seen)
+    assert [d for d, _ in seen] == sorted(d for d, _ in seen)

@@ -230,3 +230,64 @@ def test_nitsche_never_hands_a_singular_system_to_the_linear_solve(monkeypatch, 
     assert result.verified, result.message
     np.testing.assert_allclose(result.contact_force, reference(scene).contact_force,
                                rtol=0, atol=1e-10 * 1e3)
+
+
+# --- a bar wedged between walls that leave it no room: unloaded, yet its place is forced.
+# With no load the bar does not deform, so every node sits at the + wall's gap g₊
+# (= −g₋), and no wall needs to push: u = g₊ everywhere, λ = 0.
+WEDGED = {
+    "two zero-gap walls at one node": (
+        Scene(Bar.uniform(1e-4, E, length=1.0, elements=2), (),
+              walls=(Wall(2, 0.0, "+"), Wall(2, 0.0, "-"))), 0.0),
+    "walls at both ends, shifted": (
+        Scene(Bar.uniform(1e-4, E, length=1.0, elements=2), (),
+              walls=(Wall(2, 1e-3, "+"), Wall(0, -1e-3, "-"))), 1e-3),
+}
+
+
+@pytest.mark.parametrize("name", list(WEDGED))
+@pytest.mark.parametrize("method", ["lagrange", "penalty", "augmented"])
+def test_an_unloaded_bar_wedged_between_walls_sits_where_they_leave_it(name, method):
+    """Refused as "position not determined" before, although u = g₊ is forced."""
+    scene, at = WEDGED[name]
+    assert unheld_bars(scene) == ""
+    result = contactqp.solve(scene, method)
+    assert result.verified and result.physical
+    assert np.array_equal(result.u, np.full(3, at))
+    assert np.array_equal(result.contact_force, np.zeros(2))
+
+
+def test_nitsche_solves_a_bar_wedged_at_its_ends():
+    scene, at = WEDGED["walls at both ends, shifted"]
+    result = contactqp.solve(scene, "nitsche")
+    assert result.verified
+    np.testing.assert_allclose(result.u, np.full(3, at), rtol=1e-12)
+    assert np.abs(result.contact_force).max() == 0.0
+
+
+def test_a_wedged_bar_beside_a_loaded_one_leaves_that_one_its_closed_form():
+    """Bar 0 supported at node 0, 1e3 N at node 2 and an open wall; bar 1 wedged: bar 0's
+    tip moves F·L/(EA) = 1e3·1/(2e11·1e-4) = 5e-5 m, bar 1 stays at 0."""
+    bars = (Bar.uniform(1e-4, 2e11, length=1.0, elements=2),
+            Bar.uniform(1e-4, 2e11, length=1.0, elements=2))
+    scene = Scene(bars, (Support(0, 0),), (Load(2, 1e3, 0),),
+                  (Wall(2, 1e-4, "+", 0), Wall(1, 0.0, "+", 1), Wall(1, 0.0, "-", 1)))
+    result = contactqp.solve(scene)
+    assert result.verified
+    np.testing.assert_allclose(result.u, [0.0, 2.5e-5, 5e-5, 0.0, 0.0, 0.0], rtol=1e-12,
+                               atol=0.0)
+    assert np.array_equal(result.contact_force, np.zeros(3))
+
+
+@pytest.mark.parametrize(("walls", "load"), [
+    ((Wall(2, 1e-4, "+"), Wall(2, 0.0, "-")), None),  # room 1e-4 m: anywhere in it
+    ((Wall(2, 0.0, "+"), Wall(2, 0.0, "-")), Load(1, 0.0)),  # a zero load is no load
+])
+def test_a_free_bar_with_room_or_a_load_is_still_judged_by_its_load(walls, load):
+    scene = Scene(Bar.uniform(1e-4, E, length=1.0, elements=2), (),
+                  () if load is None else (load,), walls)
+    message = unheld_bars(scene)
+    if load is None:
+        assert "its position between its walls and contacts is not determined" in message
+    else:
+        assert message == ""

@@ -106,6 +106,15 @@ def test_symmetric_nitsche_below_its_threshold_says_what_is_stable():
         contactqp.solve(None, "nitsche", gamma0=1.0, theta=1.0)
 
 
+def test_a_singular_system_with_a_large_gamma0_advises_a_smaller_one():
+    """Round-off, not instability, makes a large γ₀'s system singular: "a larger γ₀" (as
+    γ₀ = 1e300 was told) is no advice there."""
+    from contactqp.methods.nitsche import DEFAULT_GAMMA0, _advice
+
+    assert "a smaller γ₀" in _advice(1e20)
+    assert "a larger γ₀" in _advice(DEFAULT_GAMMA0)
+
+
 @pytest.mark.parametrize(("options", "message"), [
     ({"theta": 0.5}, "theta must be one of 1, 0, -1"),
     ({"gamma0": 0.0}, "gamma0"),

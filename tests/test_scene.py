@@ -117,6 +117,24 @@ BAD_OBJECTS = [
                    walls=(Wall(3, 0.0, "-"),)), "wall[0].node", "3"),
     (lambda: Scene(Bar.from_areas([1e-4], 2e11, length=1.0), (Support(0),),
                    walls=(Wall(0, 0.0, "+"),)), "wall[0].node", "0"),
+    # a table of numbers is refused, not flattened into more elements than were described
+    (lambda: Bar.uniform(1e-4, 2e11, lengths=[[0.5, 0.5]]), "bar.lengths must be a flat list",
+     "shape (1, 2)"),
+    (lambda: Bar.from_areas([1e-4] * 4, np.full((1, 4), 2e11), length=1.0),
+     "material.youngs_modulus must be a flat list", "shape (1, 4)"),
+    (lambda: Bar.from_areas([[1e-4, 1e-4], [1e-4, 1e-4]], 2e11, length=1.0),
+     "bar.areas must be a flat list", "shape (2, 2)"),
+    (lambda: Scene(Bar.from_areas([1e-4], 2e11, length=1.0), (Support(0),), units=[]),
+     "units must be one of 'SI', 'mm-N-MPa'", "got []"),
+    (lambda: Scene(Bar.from_areas([1e-4], 2e11, length=1.0), (Support(0),), units={}),
+     "units must be one of 'SI', 'mm-N-MPa'", "got {}"),
+    (lambda: Scene(Bar.from_areas([1e-4], 2e11, length=1.0), (Support(0),), name=123),
+     "name must be text", "got 123"),
+    (lambda: Scene(Bar.from_areas([1e-4], 2e11, length=1.0), (Support(0),), name="\ud800"),
+     "name must be text UTF-8 can hold", "'\\ud800'"),
+    (lambda: Scene(Bar.from_areas([1e-4] * 4, 2e11, length=1.0), (Support(0),),
+                   contacts=(BarContact(0, 1, 0, 3, 0.0),)),
+     "contact[0]: bar_a = bar_b = 0; a bar contact joins two different bars", None),
 ]
 
 

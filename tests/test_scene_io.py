@@ -232,6 +232,17 @@ BAD_DATA = [
     (valid_data, ("support", 0, "nodes"), 1, "support[0].nodes", "unknown key"),
     (valid_data, ("load", 0, "forse"), 1.0, "load[0].forse", "unknown key"),
     (valid_data, ("wall", 0, "gapp"), 0.0, "wall[0].gapp", "unknown key"),
+    # values TOML can hold that are not what the key means: refused, not turned into text
+    # or flattened
+    (valid_data, ("name",), 123, "name must be text", "123"),
+    (valid_data, ("name",), [], "name must be text", "[]"),
+    (valid_data, ("name",), {"a": 1}, "name must be text", "{'a': 1}"),
+    (valid_data, ("units",), [], "units must be one of", "got []"),
+    (valid_data, ("units",), {}, "units must be one of", "got {}"),
+    (valid_data, ("bar", "areas"), [[1e-4, 1e-4], [1e-4, 1e-4]], "bar.areas must be a flat list",
+     "shape (2, 2)"),
+    (valid_data, ("contact",), [{"bar_a": 0, "node_a": 1, "bar_b": 0, "node_b": 2, "gap": 0.0}],
+     "contact[0]: bar_a = bar_b = 0", "two different bars"),
 ]
 
 
@@ -408,6 +419,29 @@ def test_toml_round_trip_keeps_a_name_with_an_apostrophe(tmp_path: Path):
     path = tmp_path / "scene.toml"
     path.write_text(contactqp.scene_to_toml(scene), encoding="utf-8")
     assert_same_scene(contactqp.load_scene(path), scene)
+
+
+@pytest.mark.parametrize("name", ["bar 🚀", 'quote " and back\\slash', "tab\tnew\nline\x7f\x00",
+                                  "é, 中, ∑"])
+def test_toml_round_trip_keeps_any_name(tmp_path: Path, name):
+    """Characters beyond U+FFFF, quotes, backslashes and control characters come back as they
+    went in (JSON's surrogate-pair escape of an emoji is not TOML)."""
+    scene = contactqp.default_scene()
+    scene = Scene(scene.bars[0], scene.supports, scene.loads, scene.walls, name=name)
+    path = tmp_path / "scene.toml"
+    path.write_text(contactqp.scene_to_toml(scene), encoding="utf-8")
+    assert contactqp.load_scene(path).name == name
+
+
+def test_a_byte_order_mark_is_read_past(tmp_path: Path):
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + EXAMPLE_TOML.encode("utf-8"))
+    assert contactqp.load_scene(path).name == "my scene"
+
+
+def test_an_empty_path_says_so():
+    with pytest.raises(SceneError, match=r"^scene file path is empty \(''\)$"):
+        contactqp.load_scene("")
 
 
 def test_example_toml_file_is_the_seed_scene(tmp_path: Path):

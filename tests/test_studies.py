@@ -106,3 +106,26 @@ def test_compare_holds_every_inequality_run_against_the_exact_reference():
     assert lagrange.exact_error == abs(lagrange.result.contact_force[0] - 6000.0) < 1e-9
     labels = [run.label for run in inequality]
     assert "semismooth_newton FB" in labels and len(set(labels)) == len(labels)
+
+
+@pytest.mark.parametrize("study", [compare, penalty_sweep])
+def test_a_study_of_a_scene_too_big_to_hold_is_refused_before_any_solve(study, monkeypatch):
+    """At 10⁷ elements compare grew past 24 GB and was killed: beyond MAX_STUDY_ELEMENTS a
+    study says so up front, with the size it takes."""
+    from contactqp import studies
+
+    def never(*args, **kwargs):
+        raise AssertionError("solved before the size was checked")
+
+    monkeypatch.setattr(studies, "solve", never)
+    monkeypatch.setattr(studies, "exact_reference", never)
+    scene = contactqp.default_scene(studies.MAX_STUDY_ELEMENTS + 2)
+    with pytest.raises(contactqp.SceneError, match=r"^bar: the scene has 1000002 elements; "
+                                                   r".* takes at most 1000000"):
+        study(scene)
+
+
+def test_a_sweep_tells_its_progress_after_each_solve():
+    seen = []
+    penalty_sweep(penalties=(1e6, 1e8), progress=lambda done, total: seen.append((done, total)))
+    assert seen == [(1, 4), (2, 4), (3, 4), (4, 4)]

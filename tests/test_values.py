@@ -53,6 +53,21 @@ BAD_CALLS = [  # (what, call, words the message must contain)
     ("load 1e308", lambda: DEFAULT_SCENE.with_loads((Load(2, 1e308),)), ["load[0].force", "1e+308"]),
     ("name a number", lambda: Scene(BAR, (Support(0),), name=3), ["name", "3"]),
     ("units unknown", lambda: Scene(BAR, (Support(0),), units="inch"), ["units", "'inch'"]),
+    # options have a magnitude range, as a scene's numbers do: 1e300 overflowed what it
+    # multiplies (a penalty ended "not verified", γ₀ leaked a RuntimeWarning)
+    ("penalty 1e300", lambda: contactqp.solve(DEFAULT_SCENE, "penalty", penalty=1e300),
+     ["penalty = 1e+300", "outside the range"]),
+    ("gamma0 1e300", lambda: contactqp.solve(DEFAULT_SCENE, "nitsche", gamma0=1e300),
+     ["gamma0 = 1e+300", "outside the range"]),
+    ("tolerance 1e-300", lambda: contactqp.solve(DEFAULT_SCENE, "pgs", tolerance=1e-300),
+     ["tolerance = 1e-300", "outside the range"]),
+    ("sweep of text", lambda: contactqp.penalty_sweep(penalties=("x",)), ["penalties[0]", "'x'"]),
+    ("sweep of -1", lambda: contactqp.penalty_sweep(penalties=(-1,)), ["penalties[0]", "-1"]),
+    ("sweep of nothing", lambda: contactqp.penalty_sweep(penalties=()),
+     ["penalties must hold at least one number", "()"]),
+    ("sweep of a number", lambda: contactqp.penalty_sweep(penalties=1e6),
+     ["penalties must be a sequence", "1000000.0"]),
+    ("model of text", lambda: contactqp.build_model("x"), ["scene must be a contactqp.Scene", "'x'"]),
     ("check with a short u", lambda: contactqp.check(DEFAULT_SCENE, [0.0], [0.0], [0.0], "inequality"),
      ["u", "5"]),
 ]

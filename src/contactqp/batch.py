@@ -35,6 +35,7 @@ from contactqp.check import TOLERANCES, natural_map, row_compliance_roots
 from contactqp.errors import ContactqpError, SceneError, SolverError
 from contactqp.methods import cases as many
 from contactqp.model import Model, displacement_scale_rule, force_scale_rule, load_force_terms
+from contactqp.progress import Progress
 from contactqp.result import Result, Solution, make_result
 from contactqp.scene import Scene
 
@@ -150,13 +151,14 @@ class Batch:
 
 
 def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,
-                cases: int) -> Batch:
+                cases: int, progress: Progress | None = None) -> Batch:
     """Every case of ``loads`` and ``gaps`` (None: the scene's own values in every case),
-    solved and checked (module docstring)."""
+    solved and checked (module docstring); ``progress(done, cases)`` after each case solved
+    alone, and at the end (:mod:`contactqp.progress`)."""
     start = time.perf_counter()
     scene = prepared.scene
     if not prepared.together:
-        return _case_by_case(prepared, loads, gaps, cases, start)
+        return _case_by_case(prepared, loads, gaps, cases, start, progress)
     tiled = prepared.tiled(cases)
     tiled_loads, tiled_gaps = tiled_values(scene, _values(loads, prepared.scene_loads, cases),
                                            _values(gaps, prepared.model.g, cases))
@@ -223,6 +225,8 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
     for case, result in alone.items():
         _take(batch, case, result)
     object.__setattr__(batch, "time", time.perf_counter() - start)
+    if progress is not None:
+        progress(cases, cases)
     return batch
 
 
@@ -288,8 +292,12 @@ def _take(batch: Batch, case: int, result: Result) -> None:
 
 
 def _case_by_case(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,
-                  cases: int, start: float) -> Batch:
-    results = {case: _alone(prepared, loads, gaps, case) for case in range(cases)}
+                  cases: int, start: float, progress: Progress | None) -> Batch:
+    results = {}
+    for case in range(cases):
+        results[case] = _alone(prepared, loads, gaps, case)
+        if progress is not None:
+            progress(case + 1, cases)
     rows = [_row(results[case]) for case in range(cases)]
     arrays = {name: np.array([row[name] for row in rows])
               for name in (*ROW_FIELDS, "iterations")}

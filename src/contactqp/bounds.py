@@ -132,10 +132,21 @@ def _pushing(layout: Layout, lam: np.ndarray, pen: np.ndarray, hold: float,
     rows, row_nodes, _, gaps = layout.rows
     if equality:
         return np.ones(gaps.size, dtype=bool), None
-    strong = lam > hold
+    wedged = _wedged(layout)  # walls that hold a bar in place with no force
+    strong = (lam > hold) | wedged
     held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[strong[rows]])
     s, s_ends = row_stiffness(layout, held, strong, ends=True)
-    return lam > np.maximum(-pen, 0.0) * s, (strong, held, s, s_ends)
+    return (lam > np.maximum(-pen, 0.0) * s) | wedged, (strong, held, s, s_ends)
+
+
+def _wedged(layout: Layout) -> np.ndarray:
+    """:func:`contactqp.feasibility.wedged_rows` of the scene (all False where every bar has
+    a support, without looking at the walls)."""
+    if not layout.floating_bars.size:
+        return np.zeros(layout.rows[3].size, dtype=bool)
+    from contactqp.feasibility import wedged_rows
+
+    return wedged_rows(layout.scene)
 
 
 def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
@@ -204,7 +215,7 @@ def _release(layout: Layout, held: np.ndarray, pushing: np.ndarray, lam: np.ndar
     (Measured: HiGHS left a wall pushing with 7e-6 N where the exact answer has the wall on
     the node's other side 1.7e-7 m away, across an element of 6400 N/m; force bound 6e-3 N,
     displacement bound 3e-11 m, verified and 9e-4 of U off without this.)"""
-    unsure = pushing & (lam <= force_bound)
+    unsure = pushing & (lam <= force_bound) & ~_wedged(layout)  # wedged: held whatever λ
     if not unsure.any():
         return 0.0
     rows, row_nodes, _, _ = layout.rows
@@ -254,8 +265,11 @@ def unpinned_bar(layout: Layout, pushing: np.ndarray) -> int | None:
     (through other bars), or None: nothing in the answer fixes where such a bar is."""
     if not layout.floating_bars.size:
         return None
+    from contactqp.feasibility import wedged_bars
+
     labels = bar_groups(layout.scene, pushing)
-    loose = np.flatnonzero(labels[:-1] != labels[-1])
+    loose = np.setdiff1d(np.flatnonzero(labels[:-1] != labels[-1]),
+                         list(wedged_bars(layout.scene)))
     return int(loose[0]) if loose.size else None
 
 

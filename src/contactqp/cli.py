@@ -17,8 +17,11 @@ from pathlib import Path
 from typing import Any
 
 from contactqp import __version__, formatting
+from contactqp.cli_input import check_out_folder, negative_numbers_joined
 from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
+from contactqp.methods.lagrange import ACTIVE_SETS
+from contactqp.progress import Report
 from contactqp.report import detail_table, table
 from contactqp.result import Result
 from contactqp.scene import Scene, Units
@@ -42,6 +45,14 @@ EXIT_CODES = {
 }
 STUDY_EXIT = ("exit status 0 when the table is produced, even where some runs fail their "
               "check: showing where each method fails is the point")
+
+
+PROGRESS_AFTER = 5.0  # s: a longer run shows its progress on stderr, a line a second
+
+
+def _progress(label: str) -> Report:
+    """Progress lines on stderr for a run that goes on past PROGRESS_AFTER seconds."""
+    return Report(f"contactqp: {label}", quiet=PROGRESS_AFTER)
 
 
 def _scene(path: str | None) -> Scene:
@@ -82,7 +93,7 @@ def _write_charts(result: Result, sweep: PenaltySweep, out: Path,
 
 def command_compare(args: argparse.Namespace) -> int:
     scene = _scene(args.scene)
-    runs = compare(scene)
+    runs = compare(scene, progress=_progress("compare, runs"))
     bars = f"{len(scene.bars)} bars, " if len(scene.bars) > 1 else ""
     contacts = f", {len(scene.contacts)} bar contact(s)" if scene.contacts else ""
     print(f"scene: {scene.name} ({bars}{scene.n_elements} elements, {len(scene.walls)} wall(s)"
@@ -91,7 +102,8 @@ def command_compare(args: argparse.Namespace) -> int:
     answers = [r.result for r in runs if r.result is not None]
     shown = next((r for r in answers if r.verified and r.physical), answers[0] if answers else None)
     if _charts_wanted(args) and shown is not None:
-        for path in _write_charts(shown, penalty_sweep(scene), _out(args), args.scene is None):
+        sweep = penalty_sweep(scene, progress=_progress("penalty sweep for the chart, solves"))
+        for path in _write_charts(shown, sweep, _out(args), args.scene is None):
             print(f"chart: {path}")
         if args.scene is not None:
             print("(Nitsche's γ₀ sweep and the mesh convergence study the default scene: "
@@ -107,7 +119,8 @@ def _qp_options(args: argparse.Namespace) -> dict[str, Any]:
 
 def command_solve(args: argparse.Namespace) -> int:
     options: dict[str, Any] = {}
-    for name in ("penalty", "relaxation", "ncp", "tolerance", "max_iterations"):
+    for name in ("penalty", "relaxation", "ncp", "tolerance", "max_iterations", "active_set",
+                 "gamma0", "theta"):
         if getattr(args, name) is not None:
             options[name] = getattr(args, name)
     options.update(_qp_options(args))
@@ -164,7 +177,7 @@ def _sweep_row(eps: float, sweep: PenaltySweep, i: int) -> list[str]:
 
 def command_penalty_sweep(args: argparse.Namespace) -> int:
     scene = _scene(args.scene)
-    sweep = penalty_sweep(scene, contact=args.contact)
+    sweep = penalty_sweep(scene, contact=args.contact, progress=_progress("penalty sweep, solves"))
     if args.json:
         print(json.dumps(sweep.to_dict(), indent=2, allow_nan=False))
         return OK
@@ -195,7 +208,7 @@ def command_curve(args: argparse.Namespace) -> int:
     from contactqp.curve import first_contact_factor, load_path
 
     scene = _scene(args.scene)
-    path = load_path(scene, steps=args.steps)
+    path = load_path(scene, steps=args.steps, progress=_progress("load path, steps"))
     if args.json:
         print(json.dumps(path.to_dict(), indent=2))
         return OK
@@ -299,6 +312,14 @@ def parser() -> argparse.ArgumentParser:
                                    "λ), pgs and semismooth_newton (natural-map residual)")
     solve_parser.add_argument("--max-iterations", type=int, dest="max_iterations",
                               help="steps, sweeps or pivots at most (every method but qp)")
+    solve_parser.add_argument("--active-set", dest="active_set", choices=ACTIVE_SETS,
+                              help="method lagrange: the hull's active set (default where it "
+                                   "applies) or the rows passed, added one step at a time")
+    solve_parser.add_argument("--gamma0", type=float,
+                              help="γ₀ of method nitsche, γ = γ₀·EA/h (default 100)")
+    solve_parser.add_argument("--theta", type=float,
+                              help="θ of method nitsche: 1 (symmetric, the default), 0 or -1 "
+                                   "(skew-symmetric, stable for every γ₀)")
     solve_parser.add_argument("--backend", help="QP backend, method qp (see contactqp solvers)")
     solve_parser.add_argument("--solver", help="QP solver of the backend, method qp")
     solve_parser.add_argument("--accuracy", choices=("default", "high"), help="method qp")
@@ -326,9 +347,24 @@ def parser() -> argparse.ArgumentParser:
     return top
 
 
+NUMBER_OPTIONS = ("--penalty", "--relaxation", "--tolerance", "--max-iterations", "--gamma0",
+                  "--theta", "--steps")
+
+
+def _writes_charts(args: argparse.Namespace) -> bool:
+    if args.handler is command_solvers or getattr(args, "json", False):
+        return False
+    if args.handler is command_solve:  # solve draws only when given --out
+        return bool(getattr(args, "out", None)) and _charts_wanted(args)
+    return _charts_wanted(args)
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = parser().parse_args(negative_numbers_joined(argv, NUMBER_OPTIONS))
     try:
+        if _writes_charts(args):  # before anything runs: found after, it was exit 3
+            check_out_folder(_out(args))
         return args.handler(args)
     except ContactqpError as error:
         print(f"contactqp: error: {error}", file=sys.stderr)

@@ -25,8 +25,9 @@ import numpy as np
 from contactqp.errors import ContactqpError, OptionError
 from contactqp.model import Model, build_model, wall_stiffness
 from contactqp.prepared import prepare
+from contactqp.progress import Progress, as_progress
 from contactqp.result import Result, plain
-from contactqp.scene import Scene
+from contactqp.scene import MAX_ELEMENTS, Scene
 from contactqp.solve import as_scene
 from contactqp.values import whole_number
 
@@ -41,6 +42,9 @@ CURVE_METHODS: dict[str, tuple[str, str, dict[str, Any]]] = {
     "qp": ("qp", "inequality", {"backend": "cvxpy"}),
 }
 DEFAULT_STEPS = 21
+# 1001 steps of the default scene took 28 s (every curve method, a shared 2-core machine) and
+# time grows in proportion: 10⁴ steps are minutes, 10⁸ would be years
+MAX_STEPS = 10_000
 SOFT_PENALTY_PER_STIFFNESS = 1.0  # ε of the soft penalty, times the stiffness the walls see
 
 
@@ -135,13 +139,23 @@ def first_contact_factor(scene: Scene) -> float:
     return float(np.min(model.g[reached] / closing[reached], initial=np.inf))
 
 
-def _factors(steps: Any) -> np.ndarray:
+def _factors(steps: Any, scene: Scene) -> np.ndarray:
+    """``steps`` load factors from 0 to 1, a number the run can finish and hold: at most
+    :data:`MAX_STEPS`, and steps times the scene's elements at most :data:`MAX_ELEMENTS` (a
+    method's steps are one batch, :meth:`contactqp.Prepared.solve_many`)."""
     steps = whole_number("steps", steps, 2, error=OptionError, note=" (0 and 1 included)")
+    most = min(MAX_STEPS, MAX_ELEMENTS // scene.n_elements)
+    if steps > most:
+        why = (f"contactqp steps a load path {MAX_STEPS} times at most" if most == MAX_STEPS
+               else f"a scene of {scene.n_elements} elements is stepped {most} times at most "
+                    f"({MAX_ELEMENTS} elements in all)")
+        raise OptionError(f"steps = {steps}: {why}")
     return np.linspace(0.0, 1.0, steps)
 
 
 def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
-              methods: dict[str, tuple[str, str, dict[str, Any]]] | None = None) -> LoadPath:
+              methods: dict[str, tuple[str, str, dict[str, Any]]] | None = None,
+              progress: Any = None) -> LoadPath:
     """The force–displacement curve of ``scene`` (default scene when None) at ``steps`` load
     factors from 0 to 1 (from 1/steps where a bar is held by contact alone), for each of ``methods`` (name -> (method, contact, options); default
     :func:`curve_methods`): each method prepared once and its steps solved as one batch
@@ -157,6 +171,10 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
         The number of load factors, 0 and 1 included (default 21).
     methods : dict, optional
         name -> (method, contact, options); default :func:`curve_methods`.
+    progress : bool or callable, optional
+        True: a line on stderr each second of a run longer than a second (steps done of
+        every method's, and the time left); a callable: ``progress(done, total)`` as the
+        steps are solved (:mod:`contactqp.progress`). Default: nothing is printed.
 
     Returns
     -------
@@ -166,31 +184,42 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
     Raises
     ------
     OptionError
-        ``steps`` is not a whole number of at least 2, or a method's options are bad.
+        ``steps`` is not a whole number from 2 to :data:`MAX_STEPS` (and at most
+        :data:`MAX_ELEMENTS` over the scene's elements), or a method's options are bad.
     SceneError
         A scene whose loads leave a bar held by contact alone unheld.
     """
     scene = as_scene(scene)
-    factors = _factors(steps)
+    factors = _factors(steps, scene)
+    report = as_progress(progress, "load path")
     model = build_model(scene)
     if model.floating:  # with no load nothing fixes where such a bar is: start one step in
         factors = np.linspace(0.0, 1.0, factors.size + 1)[1:]
     methods = curve_methods(model) if methods is None else methods
     node = model.layout.load_point()
     paths, failed = {}, {}
-    for name, (method, contact, options) in methods.items():
+    total = factors.size * len(methods)
+    for i, (name, (method, contact, options)) in enumerate(methods.items()):
+        done = i * factors.size  # the steps of the methods before this one
+
+        def step(solved: int, _: int, done: int = done) -> None:
+            report(done + solved, total)
+
         try:
-            paths[name] = _method_path(scene, factors, node, method, contact, options)
+            paths[name] = _method_path(scene, factors, node, method, contact, options,
+                                       None if report is None else step)
         except ContactqpError as error:
             failed[name] = str(error)
+            if report is not None:
+                report(done + factors.size, total)
     return LoadPath(scene, factors, node, paths, failed)
 
 
 def _method_path(scene: Scene, factors: np.ndarray, node: int, method: str, contact: str,
-                 options: dict[str, Any]) -> MethodPath:
+                 options: dict[str, Any], progress: Progress | None) -> MethodPath:
     """One method's curve: prepared once, its steps solved as one batch."""
     prepared = prepare(scene, method, contact, **options)
-    batch = prepared.solve_many(loads=np.outer(factors, prepared.scene_loads))
+    batch = prepared.solve_many(loads=np.outer(factors, prepared.scene_loads), progress=progress)
     return MethodPath(batch.u[:, node], batch.contact_force, batch.penetration, batch.verified,
                       batch.physical, tuple(batch[step] for step in range(factors.size)))
 
@@ -198,6 +227,7 @@ def _method_path(scene: Scene, factors: np.ndarray, node: int, method: str, cont
 __all__ = [
     "CURVE_METHODS",
     "DEFAULT_STEPS",
+    "MAX_STEPS",
     "LoadPath",
     "MethodPath",
     "curve_methods",

@@ -314,9 +314,11 @@ def unheld_bars(scene: Scene, contact: str = "inequality") -> str:
     are pressed against nothing outside them either (a press fit that squeezes them would hold
     them; such scenes are refused too). Every subset of up to :data:`MAX_FLOATING_BARS` bars is tried; the moves
     of sets are exactly the directions in which the energy has no minimum (order-preserving
-    moves are sums of such sets' moves)."""
+    moves are sums of such sets' moves). A bar wedged by its walls (:func:`wedged_bars`) is
+    held without a load."""
     layout = scene.layout
-    floating = layout.floating_bars.tolist()
+    wedged = wedged_bars(scene)  # held by their walls' want of room, on nothing else
+    floating = [b for b in layout.floating_bars.tolist() if b not in wedged]
     if not floating:
         return ""
     if len(floating) > MAX_FLOATING_BARS:
@@ -361,6 +363,44 @@ def unheld_bars(scene: Scene, contact: str = "inequality") -> str:
     return ""
 
 
+def wedged_bars(scene: Scene) -> frozenset[int]:
+    """The bars with no support, no load and no bar contact whose walls leave them no room:
+    the smallest gap of their + walls and of their − walls sum to 0, so the only place for the
+    bar, unloaded and so undeformed, is u = that + gap at every node (two zero-gap walls:
+    u = 0). Their position is forced though nothing presses them, and their walls carry no
+    force (any equal pair would do as well: the least one, 0, is the answer)."""
+    layout = scene.layout
+    floating = set(layout.floating_bars.tolist())
+    if not floating:
+        return frozenset()
+    loaded = np.add.reduceat(np.abs(layout.nodal_loads), layout.node_offsets[:-1]) > 0.0
+    touched = {c.bar_a for c in scene.contacts} | {c.bar_b for c in scene.contacts}
+    candidates = sorted(b for b in floating - touched if not loaded[b])
+    if not candidates:
+        return frozenset()
+    bar = np.fromiter((w.bar for w in scene.walls), np.intp, len(scene.walls))
+    plus = np.fromiter((w.side == "+" for w in scene.walls), bool, len(scene.walls))
+    gap = np.fromiter((w.gap for w in scene.walls), float, len(scene.walls))
+    wedged = []
+    for b in candidates:
+        ahead, behind = gap[(bar == b) & plus], gap[(bar == b) & ~plus]
+        if ahead.size and behind.size:
+            g_plus, g_minus = float(ahead.min()), float(behind.min())
+            if abs(g_plus + g_minus) <= 1e-12 * max(abs(g_plus), abs(g_minus)):
+                wedged.append(b)
+    return frozenset(wedged)
+
+
+def wedged_rows(scene: Scene) -> np.ndarray:
+    """One bool per contact row: the walls of :func:`wedged_bars`, which hold their bar in
+    place with no force (the check takes them as holding, as it does the rows that push)."""
+    wedged = wedged_bars(scene)
+    rows = np.zeros(scene.n_contacts, dtype=bool)
+    if wedged:
+        rows[: len(scene.walls)] = [w.bar in wedged for w in scene.walls]
+    return rows
+
+
 def _connected(subset: int, members: list[int], ahead: list[int], behind: list[int]) -> bool:
     """Whether the bars ``members`` (bit mask ``subset``) are joined by bar contacts among
     themselves (``ahead``/``behind``: the bit masks of what blocks each bar either way)."""
@@ -375,4 +415,5 @@ def _connected(subset: int, members: list[int], ahead: list[int], behind: list[i
 
 
 __all__ = ["constraint_graph", "equality_conflict", "impossible_constraints",
-           "indeterminate_contacts", "shortest_paths", "tight_cycles", "unheld_bars"]
+           "indeterminate_contacts", "shortest_paths", "tight_cycles", "unheld_bars",
+           "wedged_bars", "wedged_rows"]

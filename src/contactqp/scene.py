@@ -25,7 +25,14 @@ import numpy as np
 
 from contactqp.errors import OptionError, SceneError
 from contactqp.units import UNIT_SYSTEMS, Units
-from contactqp.values import number, positive_numbers, value_array, whole_number
+from contactqp.values import (
+    number,
+    one_of,
+    positive_numbers,
+    text,
+    value_array,
+    whole_number,
+)
 
 if TYPE_CHECKING:
     from contactqp.model.layout import Layout
@@ -522,11 +529,8 @@ class Scene:
             object.__setattr__(self, key, _items(getattr(self, key), kind, plural))
         if not self.bars:
             raise SceneError("bar: no bar; give at least one [bar]")
-        if not isinstance(self.name, str):
-            raise SceneError(f"name must be text, got {self.name!r}")
-        if self.units not in UNIT_SYSTEMS:
-            raise SceneError(f"units must be one of {', '.join(map(repr, UNIT_SYSTEMS))}, "
-                             f"got {self.units!r}")
+        text("name", self.name)
+        one_of("units", self.units, UNIT_SYSTEMS)
         total = sum(b.n_elements for b in self.bars)
         if total > MAX_ELEMENTS:
             raise SceneError(f"bar: {total} elements in all; contactqp takes at most "
@@ -740,8 +744,9 @@ def _check_contacts(scene: Scene, node, held: dict[int, int],
         a = node(f"contact[{i}]", c.bar_a, c.node_a, suffix="_a")
         b = node(f"contact[{i}]", c.bar_b, c.node_b, suffix="_b")
         number(f"contact[{i}].gap", c.gap, tiny=True)
-        if a == b:
-            raise SceneError(f"contact[{i}]: node_a and node_b are the same node")
+        if c.bar_a == c.bar_b:  # its own elements already join the two nodes
+            raise SceneError(f"contact[{i}]: bar_a = bar_b = {c.bar_a}; a bar contact joins "
+                             "two different bars (a wall holds a node of one bar)")
         if a in held and b in held:
             raise SceneError(f"contact[{i}]: both nodes are supports; the contact carries no force")
         if (a, b) in pairs:

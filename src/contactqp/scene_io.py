@@ -4,7 +4,6 @@ names the field as the file spells it."""
 
 from __future__ import annotations
 
-import json
 import tomllib
 from dataclasses import fields
 from pathlib import Path
@@ -192,7 +191,7 @@ def scene_from_dict(data: dict, name: str = "scene") -> Scene:
         for c in _array_of_tables(data, "contact", {"bar_a", "node_a", "bar_b", "node_b", "gap"},
                                   {"bar_a", "node_a", "bar_b", "node_b", "gap"})
     )
-    scene = Scene(bars, supports, loads, walls, name=str(data.get("name", name)),
+    scene = Scene(bars, supports, loads, walls, name=data.get("name", name),
                   units=data.get("units", "SI"),
                   distributed=distributed, contacts=contacts)
     for i, o in enumerate(_array_of_tables(data, "obstacle", {"gap", "side", "bar"}, {"gap"})):
@@ -224,9 +223,11 @@ def load_scene(path: str | Path) -> Scene:
         The file does not exist, cannot be read, is not TOML, or holds a bad key or value (one
         line naming the field as the file spells it).
     """
+    if str(path) == "":  # Path("") is ".", the working folder: say what was given
+        raise SceneError("scene file path is empty ('')")
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
+    try:  # utf-8-sig: a byte-order mark, which some editors write, is read past
+        text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise SceneError(f"scene file {str(path)!r} does not exist") from None
     except (OSError, UnicodeDecodeError) as error:
@@ -251,6 +252,18 @@ def _bar_geometry(bar: Bar) -> list[str]:
     return [*lines, f"areas = {[float(a) for a in bar.areas]!r}"]
 
 
+def toml_string(value: str) -> str:
+    """``value`` as a TOML basic string: every character as it is but the quotation mark, the
+    backslash and the control characters, which are escaped (JSON's escapes of characters
+    beyond U+FFFF are surrogate pairs, which TOML refuses)."""
+    def escaped(char: str) -> str:
+        if char in '"\\':
+            return "\\" + char
+        return f"\\u{ord(char):04X}" if ord(char) < 0x20 or ord(char) == 0x7F else char
+
+    return '"' + "".join(map(escaped, value)) + '"'
+
+
 def scene_to_toml(scene: Scene) -> str:
     """The scene as TOML text that :func:`load_scene` reads back to the same scene: each
     bar's areas and lengths (a section as the areas it gave, one ``area`` for a uniform
@@ -266,8 +279,7 @@ def scene_to_toml(scene: Scene) -> str:
     str
         The TOML text.
     """
-    lines = [f"name = {json.dumps(scene.name)}",  # JSON strings are TOML
-             f"units = {json.dumps(scene.units)}"]
+    lines = [f"name = {toml_string(scene.name)}", f"units = {toml_string(scene.units)}"]
     several = len(scene.bars) > 1
     for i, bar in enumerate(scene.bars):
         moduli = np.unique(bar.youngs_modulus)
@@ -293,4 +305,4 @@ def scene_to_toml(scene: Scene) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["load_scene", "scene_from_dict", "scene_to_toml"]
+__all__ = ["load_scene", "scene_from_dict", "scene_to_toml", "toml_string"]

@@ -3,7 +3,9 @@ reference where there is one), and the penalty sweep."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -15,18 +17,34 @@ from contactqp.builders import (
     DEFAULT_MODULUS,
     default_scene,
 )
-from contactqp.errors import ContactqpError, SceneError
+from contactqp.errors import ContactqpError, OptionError, SceneError
 from contactqp.methods import CONTACT_KINDS
 from contactqp.methods.penalty import TEXTBOOK_PENALTY
 from contactqp.methods.qp import available_qp_solvers
 from contactqp.model import contact_forces_on_nodes, largest
+from contactqp.progress import as_progress, counter
 from contactqp.reference import reference
 from contactqp.result import Result, plain
 from contactqp.scene import Load, Scene
 from contactqp.solve import as_scene, solve
+from contactqp.values import positive_values
 
 ROUND_OFF = 1e-12  # relative: a force error (of the force) or a force (of F) below it is round-off
 SWEEP_PENALTIES = (1.0,) + tuple(10.0 ** k for k in range(5, 21))  # N/m: 1, 1e5, 1e6 … 1e20
+# A study keeps every run's Result: at 10⁶ elements compare took 5.2 GB and 53 s, the penalty
+# sweep 2.9 GB and 45 s (default_scene(10⁶), a shared 2-core machine), growing in proportion;
+# at the 10⁷ a scene may have, compare grew past 24 GB and was killed
+MAX_STUDY_ELEMENTS = 1_000_000
+
+
+def study_size(scene: Scene, study: str) -> Scene:
+    """``scene`` if ``study`` can hold its answers (:data:`MAX_STUDY_ELEMENTS`), else a
+    SceneError, before anything is solved."""
+    if scene.n_elements > MAX_STUDY_ELEMENTS:
+        raise SceneError(f"bar: the scene has {scene.n_elements} elements; {study} keeps every "
+                         f"run's answer in memory and takes at most {MAX_STUDY_ELEMENTS}: solve "
+                         "it by one method (contactqp solve), or with fewer elements")
+    return scene
 
 
 def sweep_penalties(scene: Scene) -> tuple[float, ...]:
@@ -114,7 +132,7 @@ def exact_reference(scene: Scene) -> np.ndarray | None:
 
 
 def compare(scene: Scene | str | None = None,
-            contacts: tuple[str, ...] = CONTACT_KINDS) -> list[Run]:
+            contacts: tuple[str, ...] = CONTACT_KINDS, progress: Any = None) -> list[Run]:
     """Solve ``scene`` (a Scene, a scene file's path, or None for the default scene) by every
     method and every installed QP solver, for each contact kind; the inequality runs carry the
     exact contact forces (:func:`exact_reference`) where there are some. A method that cannot
@@ -126,6 +144,9 @@ def compare(scene: Scene | str | None = None,
         The scene, the path of a scene file, or None for the default scene.
     contacts : tuple of str
         The contact kinds to run, ``("inequality", "equality")`` by default.
+    progress : bool or callable, optional
+        True: a line on stderr each second of a comparison longer than a second; a
+        callable: ``progress(done, total)`` after each run (:mod:`contactqp.progress`).
 
     Returns
     -------
@@ -137,21 +158,26 @@ def compare(scene: Scene | str | None = None,
     OptionError
         ``scene`` is neither a Scene, a path nor None.
     SceneError
-        A scene file that cannot be read or holds bad values.
+        A scene file that cannot be read or holds bad values, or more than
+        :data:`MAX_STUDY_ELEMENTS` elements.
     """
-    scene = as_scene(scene)
+    scene = study_size(as_scene(scene), "compare")
+    report = as_progress(progress, "compare")
     exact = exact_reference(scene) if "inequality" in contacts else None
+    runs = method_runs(scene)
+    advance = counter(report, len(runs) * len(contacts))
     rows = []
     for contact in contacts:
         known = exact if contact == "inequality" else None  # the reference is unilateral
-        for method, options in method_runs(scene):
+        for method, options in runs:
             label = run_label(method, options)
             try:
                 result = solve(scene, method, contact, **options)
             except ContactqpError as error:
                 rows.append(Run(label, contact, None, str(error), known))
-                continue
-            rows.append(Run(label, contact, result, "", known))
+            else:
+                rows.append(Run(label, contact, result, "", known))
+            advance()
     return rows
 
 
@@ -288,8 +314,10 @@ def _largest_penetration(runs: tuple[Run, ...]) -> np.ndarray:
 
 
 def _sweep_runs(scene: Scene, method: str, penalties: tuple[float, ...], contact: str,
-                reference: Result) -> tuple[tuple[Run, ...], np.ndarray]:
-    """One run of ``method`` per ε, and each run's relative force error against ``reference``."""
+                reference: Result, advance: Callable[[], None]
+                ) -> tuple[tuple[Run, ...], np.ndarray]:
+    """One run of ``method`` per ε, and each run's relative force error against ``reference``;
+    ``advance()`` after each."""
     scale = max(float(np.abs(reference.contact_force).max(initial=0.0)), 1e-300)
     runs, errors = [], []
     for eps in penalties:
@@ -297,9 +325,11 @@ def _sweep_runs(scene: Scene, method: str, penalties: tuple[float, ...], contact
         try:
             result = solve(scene, method, contact, penalty=eps)
         except ContactqpError as error:
+            advance()
             runs.append(Run(label, contact, None, str(error)))
             errors.append(np.nan)
             continue
+        advance()
         runs.append(Run(label, contact, result))
         difference = np.abs(result.contact_force - reference.contact_force).max(initial=0.0)
         errors.append(float(difference) / scale)
@@ -307,7 +337,7 @@ def _sweep_runs(scene: Scene, method: str, penalties: tuple[float, ...], contact
 
 
 def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | None = None,
-                  contact: str = "inequality") -> PenaltySweep:
+                  contact: str = "inequality", progress: Any = None) -> PenaltySweep:
     """Penetration and contact force of the penalty method (and of the augmented Lagrangian
     method with the same ε) for each ε in ``penalties`` (force per length in the scene's
     units; default :func:`sweep_penalties`, 1 and 1e5 … 1e20 N/m).
@@ -320,6 +350,9 @@ def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | Non
         The values of ε, force per length in the scene's units.
     contact : str
         ``"inequality"`` (default) or ``"equality"``.
+    progress : bool or callable, optional
+        True: a line on stderr each second of a sweep longer than a second; a callable:
+        ``progress(done, total)`` after each solve (:mod:`contactqp.progress`).
 
     Returns
     -------
@@ -331,14 +364,19 @@ def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | Non
     ------
     OptionError
         A bad contact kind or ε.
+    SceneError
+        A scene of more than :data:`MAX_STUDY_ELEMENTS` elements.
     SolverError
         The Lagrange solution the sweep compares with cannot be computed.
     """
-    scene = as_scene(scene)
-    penalties = sweep_penalties(scene) if penalties is None else tuple(penalties)
+    scene = study_size(as_scene(scene), "the penalty sweep")
+    penalties = sweep_penalties(scene) if penalties is None else positive_values(
+        "penalties", penalties, "ε, force per length", OptionError)
+    advance = counter(as_progress(progress, "penalty sweep"), 2 * len(penalties))
     reference = solve(scene, "lagrange", contact)
-    runs, errors = _sweep_runs(scene, "penalty", penalties, contact, reference)
-    augmented, augmented_errors = _sweep_runs(scene, "augmented", penalties, contact, reference)
+    runs, errors = _sweep_runs(scene, "penalty", penalties, contact, reference, advance)
+    augmented, augmented_errors = _sweep_runs(scene, "augmented", penalties, contact, reference,
+                                              advance)
     depths = _largest_penetration(runs)
     iterations = np.array([0 if r.result is None else r.result.iterations for r in augmented])
     best = int(np.nanargmin(errors)) if np.any(np.isfinite(errors)) else 0

@@ -55,11 +55,49 @@ def number(name: str, value: Any, *, minimum: float | None = None, strict: bool 
 
 def positive_number(name: str, value: Any, unit: str = "",
                     error: type[ContactqpError] = SceneError) -> float:
-    """``value`` as a positive finite float (``unit`` named in the message)."""
+    """``value`` as a positive finite float (``unit`` named in the message) within
+    MAGNITUDE's range, as a scene's numbers are: a penalty of 1e300 overflows what it
+    multiplies."""
+    what = f" ({unit})" if unit else ""
     if not is_number(value) or not (math.isfinite(value) and value > 0.0):
-        what = f" ({unit})" if unit else ""
         raise error(f"{name} must be a positive finite number{what}, got {shown(value)}")
+    if not 1 / MAGNITUDE <= value <= MAGNITUDE:
+        unit = f", {unit}" if unit else ""
+        raise error(f"{name} = {shown(value)} is outside the range contactqp computes in "
+                    f"({1 / MAGNITUDE:.0e} to {MAGNITUDE:.0e}{unit})")
     return float(value)
+
+
+def positive_values(name: str, values: Any, unit: str = "",
+                    error: type[ContactqpError] = SceneError) -> tuple[float, ...]:
+    """``values``, a non-empty sequence, each a :func:`positive_number` (named ``name[i]``)."""
+    if isinstance(values, (str, bytes, dict)) or not hasattr(values, "__iter__"):
+        raise error(f"{name} must be a sequence of numbers, got {shown(values)}")
+    checked = tuple(positive_number(f"{name}[{i}]", v, unit, error) for i, v in enumerate(values))
+    if not checked:
+        raise error(f"{name} must hold at least one number, got {shown(values)}")
+    return checked
+
+
+def one_of(name: str, value: Any, choices: Any,
+           error: type[ContactqpError] = SceneError) -> str:
+    """``value`` if it is one of the names ``choices`` (a list or a dict of them): text only,
+    so that a list or a table given for a name is refused, not hashed."""
+    if not isinstance(value, str) or value not in choices:
+        raise error(f"{name} must be one of {', '.join(map(repr, choices))}, got {shown(value)}")
+    return value
+
+
+def text(name: str, value: Any, error: type[ContactqpError] = SceneError) -> str:
+    """``value`` if it is text that UTF-8 can hold (a lone surrogate cannot be written to a
+    scene file)."""
+    if not isinstance(value, str):
+        raise error(f"{name} must be text, got {shown(value)}")
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:
+        raise error(f"{name} must be text UTF-8 can hold, got {value!r}") from None
+    return value
 
 
 def whole_number(name: str, value: Any, minimum: int | None = None, what: str = "number",
@@ -94,6 +132,9 @@ def positive_numbers(name: str, values: Any, limit: int) -> np.ndarray:
         for i, value in enumerate(items):
             if not is_number(value):
                 raise SceneError(f"{name}[{i}] must be a number, got {shown(value)}")
+    if raw.ndim > 1:  # a table of numbers is not one per element: flattening would guess
+        raise SceneError(f"{name} must be a flat list of numbers (one per element), got an "
+                         f"array of shape {raw.shape}")
     if raw.size > limit:
         raise SceneError(f"{name} has {raw.size} values; contactqp takes at most {limit} "
                          "elements in a scene")

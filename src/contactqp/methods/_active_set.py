@@ -7,6 +7,7 @@ from collections.abc import Callable
 import numpy as np
 
 from contactqp.errors import SolverError
+from contactqp.feasibility import wedged_rows
 from contactqp.model import Model, bar_groups
 
 Step = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -49,6 +50,9 @@ def pinning(model: Model) -> Callable[[np.ndarray], np.ndarray]:
     ahead, behind = layout.row_bars  # per row: the bars it stops in +x and in −x (−1: none)
     ends = np.column_stack((ahead, behind))
     ends[ends < 0] = bars  # a wall's fixed side: the ground (bar_groups' last vertex)
+    # a wedged bar (no load, walls with no room) is pinned by its + walls alone: its − walls
+    # too would be a row twice over where both sides face one node, a singular system
+    never = wedged_rows(scene) & (ahead < 0)
 
     def pin(active: np.ndarray) -> np.ndarray:
         active = np.array(active, dtype=bool)
@@ -63,7 +67,7 @@ def pinning(model: Model) -> Callable[[np.ndarray], np.ndarray]:
             for stops, sign in ((ahead, 1.0), (behind, -1.0)):
                 moved = np.isin(stops, free)
                 toward = sign * push[labels[np.maximum(stops, 0)]] >= 0.0
-                adding |= moved & toward & crossing & ~active
+                adding |= moved & toward & crossing & ~active & ~never
             if not adding.any():
                 return active
             active |= adding

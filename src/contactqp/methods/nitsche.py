@@ -94,6 +94,15 @@ def boundary_rows(model: Model) -> tuple[sp.csr_array, np.ndarray]:
     return sp.csr_array((v, (r, c)), shape=(gaps.size, model.n_free)), scale
 
 
+def _advice(gamma0: float) -> str:
+    """What to try when a system is singular: a small γ₀ leaves θ = 1 unstable, a large one
+    swamps K in round-off (γ₀ = 1e300 overflowed, and "a larger γ₀" was no advice)."""
+    if gamma0 > DEFAULT_GAMMA0:
+        return (f"γ₀ = {gamma0:g} swamps the stiffness in round-off: a smaller γ₀ (the default "
+                f"is {DEFAULT_GAMMA0:g})")
+    return "a larger γ₀ or θ = −1 is stable"
+
+
 def solve_nitsche(model: Model, contact: str, *, gamma0: float = DEFAULT_GAMMA0,
                   theta: float = 1.0, max_iterations: int = MAX_ITERATIONS) -> Solution:
     """Nitsche's method (module docstring) with γ = ``gamma0`` × EA/h and ``theta``."""
@@ -124,8 +133,7 @@ def solve_nitsche(model: Model, contact: str, *, gamma0: float = DEFAULT_GAMMA0,
             u = linalg.solve(matrix, rhs)
         except SolverError as error:
             raise SolverError(f"nitsche: the system is singular with θ = {theta:g} and "
-                              f"γ₀ = {gamma0:g} ({error}); a larger γ₀ or θ = −1 is stable"
-                              ) from None
+                              f"γ₀ = {gamma0:g} ({error}); {_advice(gamma0)}") from None
         trial = S @ u - gamma * (E @ u - g)  # P_γ(u)
         pushing = (np.ones(model.n_contacts, dtype=bool) if contact == "equality"
                    else trial < 0.0)

@@ -17,7 +17,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from contactqp import linalg
-from contactqp.errors import SolverError
+from contactqp.errors import SceneError, SolverError
 from contactqp.model.layout import Layout, largest
 from contactqp.scene import Scene
 
@@ -224,8 +224,11 @@ def build_model(scene: Scene | Layout) -> Model:
     Raises
     ------
     SceneError
-        A scene whose loads leave a bar held by contact alone unheld.
+        Anything but a Scene or a Layout; a scene whose loads leave a bar held by contact
+        alone unheld.
     """
+    if not isinstance(scene, (Scene, Layout)):
+        raise SceneError(f"scene must be a contactqp.Scene or its Layout, got {scene!r}")
     layout = scene if isinstance(scene, Layout) else scene.layout
     n = layout.n_nodes
     supports = np.sort(layout.support_nodes)
