@@ -34,7 +34,7 @@ from contactqp.units import UNIT_SYSTEMS, Units
 from contactqp.values import number, value_array
 
 if TYPE_CHECKING:
-    from contactqp.model.layout import Layout
+    from contactqp.layout import Layout
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,7 +113,7 @@ class Scene:
     def layout(self) -> Layout:
         """The numbering of the scene's nodes and the arrays along it
         (:class:`~contactqp.model.Layout`), made once per scene: a scene does not change."""
-        from contactqp.model.layout import Layout
+        from contactqp.layout import Layout
 
         return Layout(self)
 
