@@ -16,12 +16,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
+from contactqp.feasibility import tight_cycles
 from contactqp.layout.derived import _read_only, load_force_scale, seen_stiffness, wall_arrays
-from contactqp.scene import Scene
+
+if TYPE_CHECKING:  # a Scene makes its layout: the layout reads it, never imports it
+    from contactqp.scene import Scene
 
 
 class ContactRows(NamedTuple):
@@ -379,6 +382,4 @@ class Layout:
     def tight_cycles(self) -> tuple[tuple[int, ...], ...]:
         """The contact rows of every one-way loop through a bar contact whose gaps add up to
         zero (:func:`contactqp.feasibility.tight_cycles`)."""
-        from contactqp.feasibility import tight_cycles
-
         return tight_cycles(self.scene)

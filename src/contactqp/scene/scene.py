@@ -9,11 +9,13 @@ from __future__ import annotations
 import copy
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from contactqp.errors import OptionError, SceneError
+from contactqp.feasibility import impossible_constraints, indeterminate_contacts
+from contactqp.layout import Layout
 from contactqp.scene.parts import (
     MAX_ELEMENTS,
     Bar,
@@ -32,9 +34,6 @@ from contactqp.scene.validation import (
 )
 from contactqp.units import UNIT_SYSTEMS, Units
 from contactqp.values import number, value_array
-
-if TYPE_CHECKING:
-    from contactqp.layout import Layout
 
 
 @dataclass(frozen=True, eq=False)
@@ -103,8 +102,6 @@ class Scene:
         _check_loads(self, node)
         walls = _check_walls(self, node, held)
         _check_contacts(self, node, held, walls)
-        from contactqp.feasibility import impossible_constraints, indeterminate_contacts
-
         conflict = impossible_constraints(self) or indeterminate_contacts(self)
         if conflict:
             raise SceneError(conflict)
@@ -113,8 +110,6 @@ class Scene:
     def layout(self) -> Layout:
         """The numbering of the scene's nodes and the arrays along it
         (:class:`~contactqp.model.Layout`), made once per scene: a scene does not change."""
-        from contactqp.layout import Layout
-
         return Layout(self)
 
     @property
@@ -179,8 +174,6 @@ class Scene:
         for name, value in changes.items():
             object.__setattr__(scene, name, value)
         if gaps is not None:
-            from contactqp.feasibility import impossible_constraints, indeterminate_contacts
-
             conflict = impossible_constraints(scene) or indeterminate_contacts(scene)
             if conflict:
                 raise SceneError(conflict)
