@@ -238,9 +238,10 @@ def _draw_contacts(ax: Axes, sketch: _Sketch, deformed: bool) -> None:
         ax.plot([x[a]] * 2, [y[b] - reach, y[b] + reach], color=CONTACT, linewidth=2.2,
                 gid=f"contact {i} {state}")
         ax.plot([x[b]], [y[b]], "o", color=CONTACT, markersize=4)
-        if deformed:  # above the face; beside the lug, between the rows, when there is one
+        if deformed:  # above the face; beside the lug, at the face's top, when there is one
+            # (not halfway between the rows: a load arrow under bar a's node sits there)
             row = len(result.scene.walls) + i
-            at = (x[a], y[b] + reach) if y[a] == y[b] else (x[a], 0.5 * (y[a] + y[b]))
+            at = (x[a], y[b] + reach)
             _force_label(ax, sketch, result.contact_force[row], *at,
                          ha=None if y[a] == y[b] else "right")
 

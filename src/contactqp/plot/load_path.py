@@ -28,7 +28,7 @@ def plot_load_path(path: LoadPath, kink: float | None = None) -> Figure:
     where a contact pulls (equality contact before the wall is reached); dotted: the
     closed-form load factor ``kink`` at which the first contact closes. Methods that could
     not solve the scene (:attr:`LoadPath.failed`) are named under the chart."""
-    figure = Figure(figsize=(8, 7), layout="constrained")
+    figure = Figure(figsize=(11, 7), layout="constrained")
     top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(3, 2))
     t, unit = path.load_factor, path.scene.unit
     n = len(path.methods)
@@ -52,8 +52,9 @@ def plot_load_path(path: LoadPath, kink: float | None = None) -> Figure:
     top.set_ylabel(f"displacement of {where} ({unit.length})")
     bottom.set_ylabel(f"sum of contact forces ({unit.force})")
     bottom.set_xlabel("load factor t (× every load of the scene)")
+    # beside the panels, not in one: a curve that reaches its wall runs flat along the top
     top.legend(handles=[*top.get_legend_handles_labels()[0], *_step_legend()], fontsize=8,
-               loc="upper left")
+               loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     if path.failed:
         top.set_title(textwrap.fill("no curve: " + "; ".join(
             f"{name}: {why}" for name, why in path.failed.items()), 110), fontsize=8,

@@ -78,7 +78,10 @@ def plot_penalty_sweep(sweep: PenaltySweep) -> Figure:
               title="contact-force error against Lagrange multipliers")
     right.tick_params(labelbottom=False)
     handles = [*right.get_legend_handles_labels()[0], *left.get_legend_handles_labels()[0][1:]]
-    left.legend(handles=[*handles, *_study_legend_extras()], fontsize=8, loc="lower left")
+    # the updates panel's own mark joins this legend: a legend of its own sat on its cap line
+    capped = [h for h in updates.get_legend_handles_labels()[0] if len(h.get_xdata())]
+    left.legend(handles=[*handles, *_study_legend_extras(), *capped], fontsize=8,
+                loc="lower left")
     figure.suptitle(f"{sweep.reference.scene.name}: the penalty method and the augmented "
                     f"Lagrangian over ε, {sweep.reference.contact} contact")
     return figure
@@ -100,8 +103,6 @@ def _draw_updates(ax: Axes, eps: np.ndarray, sweep: PenaltySweep) -> None:
         ax.axhline(cap, color="tab:red", linewidth=0.8, linestyle="--")
     ax.set(xlabel=f"penalty ε ({sweep.reference.scene.unit.stiffness})",
            ylabel="augmented: updates", ylim=(0, 1.15 * max(caps | {1})))
-    if capped.any():
-        ax.legend(fontsize=8, loc="upper right")
 
 
 def _mark_round_off(ax: Axes, sweep: PenaltySweep) -> None:
