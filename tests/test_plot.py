@@ -176,6 +176,21 @@ def test_the_bar_chart_keeps_labels_and_legend_off_the_drawing(name):
     assert "x (m)" in ax.get_xlabel()
 
 
+@pytest.mark.parametrize("name", ["default", *EXAMPLE])
+def test_the_bar_chart_writes_no_force_label_over_a_load_arrow(name):
+    """several_bars once put a bar contact's force halfway between its rows, where the load
+    arrow under bar 0's end node is drawn: the label sat on the arrow."""
+    scene = contactqp.default_scene() if name == "default" else load_scene(EXAMPLE[name])
+    ax = plot.plot_bar(contactqp.solve(scene))
+    renderer = drawn(ax).get_renderer()
+    arrows = [t.arrow_patch.get_window_extent(renderer) for t in ax.texts
+              if str(t.get_gid()).startswith("load ")]
+    labels = [t for t in ax.texts if t.get_text() and t.get_color() != "tab:green"]
+    for label in labels:
+        box = label.get_window_extent(renderer)
+        assert not any(box.overlaps(arrow) for arrow in arrows), label.get_text()
+
+
 def test_the_bar_chart_says_when_the_answer_is_not_verified_or_a_wall_pulls():
     """A penalty of 1 N/m lets the bars pass through each other by ~all of the free move:
     the check refuses it. Equality contact at a hundredth of the load pulls the wall."""
@@ -274,6 +289,25 @@ def test_the_load_path_marks_failed_and_pulling_steps_and_draws_the_contact_forc
     assert lagrange.get_ydata() == pytest.approx(expected, rel=1e-9, abs=1e-6 * DEFAULT_F)
     assert "contact force" in bottom.get_ylabel()
     assert DEFAULT_WALL_NODE == 4  # the wall the closed form's f₄ is taken to
+
+
+def test_the_load_path_legend_is_beside_the_curves():
+    """wall_at_every_node: the load point reaches its wall early and its curve runs flat
+    along the top of the panel, where a legend inside the panel would cover it."""
+    figure = plot.plot_load_path(load_path(load_scene(EXAMPLE["wall_at_every_node"]),
+                                           steps=5))
+    top = figure.axes[0]
+    renderer = drawn(top).get_renderer()
+    legend = top.get_legend().get_window_extent(renderer)
+    assert legend.x0 >= top.get_window_extent(renderer).x1
+
+
+def test_the_penalty_chart_has_one_legend_off_the_update_cap():
+    """The updates panel's legend sat on its own cap line: its mark joins the main legend."""
+    figure = plot.plot_penalty_sweep(penalty_sweep(penalties=(1.0, 1e10)))
+    assert figure.axes[2].get_legend() is None
+    names = {t.get_text() for t in figure.axes[0].get_legend().get_texts()}
+    assert "stopped at its cap: not converged" in names
 
 
 def test_the_load_path_names_a_method_that_has_no_curve():

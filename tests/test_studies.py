@@ -113,12 +113,14 @@ def test_a_study_of_a_scene_too_big_to_hold_is_refused_before_any_solve(study, m
     """At 10⁷ elements compare grew past 24 GB and was killed: beyond MAX_STUDY_ELEMENTS a
     study says so up front, with the size it takes."""
     from contactqp import studies
+    from contactqp.studies import comparison, sweeps
 
     def never(*args, **kwargs):
         raise AssertionError("solved before the size was checked")
 
-    monkeypatch.setattr(studies, "solve", never)
-    monkeypatch.setattr(studies, "exact_reference", never)
+    for module in (comparison, sweeps):
+        monkeypatch.setattr(module, "solve", never)
+    monkeypatch.setattr(comparison, "exact_reference", never)
     scene = contactqp.default_scene(studies.MAX_STUDY_ELEMENTS + 2)
     with pytest.raises(contactqp.SceneError, match=r"^bar: the scene has 1000002 elements; "
                                                    r".* takes at most 1000000"):

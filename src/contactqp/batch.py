@@ -184,6 +184,33 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
                            options=prepared.result_options, timings={})
     F, U = case_scales(model, cases, solved.free_displacement, gap_cases)
     lam = solved.contact_force
+    residuals, checked = _case_residuals(prepared, together, solved, gap_cases, F, U)
+    verified = solved.settled & np.all(
+        [residuals[name] <= SPARE * getattr(TOLERANCES, name) for name in checked
+         if together.residuals[name] is not None], axis=0)
+    physical = lam.min(axis=1, initial=0.0) >= -TOLERANCES.sign * F
+    alone, failures = _alone_where_flagged(prepared, loads, gaps, solved, verified)
+    batch = Batch(prepared, loads, gaps, np.array(together.u).reshape(cases, -1), lam.copy(),
+                  np.array(together.reactions).reshape(cases, -1),
+                  per_case_rows(together.penetration, walls, cases), verified, physical,
+                  residuals, np.full(cases, together.force_error_bound),
+                  np.full(cases, together.displacement_error_bound), F, U,
+                  solved.iterations, prepared.method, alone, failures)
+    for case, result in alone.items():
+        _take(batch, case, result)
+    object.__setattr__(batch, "time", time.perf_counter() - start)
+    if progress is not None:
+        progress(cases, cases)
+    return batch
+
+
+def _case_residuals(prepared: Prepared, together: Result, solved: many.CasesSolution,
+                    gap_cases: np.ndarray, F: np.ndarray, U: np.ndarray
+                    ) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Each case's residuals, relative to its own scales F and U (the batch's residuals are
+    relative to the scales of all the cases together), and the names of the checked ones."""
+    cases, walls = len(F), len(prepared.scene.walls)
+    lam = solved.contact_force
     residuals = {}
     checked = [name for name in together.residuals if hasattr(TOLERANCES, name)]
     for name in checked:
@@ -197,10 +224,15 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
         residuals["natural_map"] = natural_map(
             lam, -per_case_rows(together.penetration, walls, cases), free,
             row_compliance_roots(prepared.model.layout))
-    verified = solved.settled & np.all(
-        [residuals[name] <= SPARE * getattr(TOLERANCES, name) for name in checked
-         if together.residuals[name] is not None], axis=0)
-    physical = lam.min(axis=1, initial=0.0) >= -TOLERANCES.sign * F
+    return residuals, checked
+
+
+def _alone_where_flagged(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,
+                         solved: many.CasesSolution, verified: np.ndarray
+                         ) -> tuple[dict[int, Result], dict[int, str]]:
+    """The cases the batch's check flagged, each checked alone from the batch's answer and,
+    where that fails too, solved alone: (case -> its Result, case -> why its solve failed)."""
+    lam = solved.contact_force
     alone, failures = {}, {}
     for case in np.flatnonzero(~verified).tolist():
         own = None if not solved.settled[case] else _checked_alone(
@@ -216,18 +248,7 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
                                          lam[case], prepared.method,
                                          int(solved.iterations[case]))
         alone[case] = own
-    batch = Batch(prepared, loads, gaps, np.array(together.u).reshape(cases, -1), lam.copy(),
-                  np.array(together.reactions).reshape(cases, -1),
-                  per_case_rows(together.penetration, walls, cases), verified, physical,
-                  residuals, np.full(cases, together.force_error_bound),
-                  np.full(cases, together.displacement_error_bound), F, U,
-                  solved.iterations, prepared.method, alone, failures)
-    for case, result in alone.items():
-        _take(batch, case, result)
-    object.__setattr__(batch, "time", time.perf_counter() - start)
-    if progress is not None:
-        progress(cases, cases)
-    return batch
+    return alone, failures
 
 
 def _case_scene(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,

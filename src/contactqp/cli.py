@@ -11,8 +11,10 @@ it). Nothing prints a traceback."""
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -274,19 +276,40 @@ def parser() -> argparse.ArgumentParser:
     top.set_defaults(handler=command_compare, scene=None)
     commands = top.add_subparsers(dest="command", parser_class=_Parser)
 
-    def scene_command(name: str, handler, help_text: str,
-                      epilog: str | None = None) -> argparse.ArgumentParser:
-        sub = commands.add_parser(name, help=help_text, description=help_text, epilog=epilog)
-        sub.add_argument("scene", nargs="?", help="scene TOML file (default: the default scene)")
-        sub.set_defaults(handler=handler)
-        return sub
+    scene_command = functools.partial(_scene_command, commands)
+    _compare_command(scene_command)
+    _solve_command(scene_command)
+    _penalty_sweep_command(scene_command)
+    _curve_command(scene_command)
+    commands.add_parser("solvers", help="installed QP backends and solvers, and how to add more"
+                        ).set_defaults(handler=command_solvers)
+    return top
 
+
+SceneCommand = Callable[..., argparse.ArgumentParser]
+
+
+def _scene_command(commands: Any, name: str, handler: Callable, help_text: str,
+                   epilog: str | None = None) -> argparse.ArgumentParser:
+    """A command that takes a scene file (optional: the default scene)."""
+    sub = commands.add_parser(name, help=help_text, description=help_text, epilog=epilog)
+    sub.add_argument("scene", nargs="?", help="scene TOML file (default: the default scene)")
+    sub.set_defaults(handler=handler)
+    return sub
+
+
+def _compare_command(scene_command: SceneCommand) -> None:
+    """The command compare: every method on a scene, one table, charts."""
     compare_parser = scene_command(
         "compare", command_compare, "every method on a scene, one table; charts of the scene "
         "(with no scene, also Nitsche's γ₀ sweep and the mesh convergence of the default scene)",
         STUDY_EXIT)
     _chart_options(compare_parser, default=argparse.SUPPRESS)
     compare_parser.add_argument("--detail", action="store_true", help=DETAIL_HELP)
+
+
+def _solve_command(scene_command: SceneCommand) -> None:
+    """The command solve: one method, its options."""
     solve_parser = scene_command(
         "solve", command_solve, "solve a scene by one method",
         "exit status 0 when the answer is verified and physical, 1 when it fails its check or "
@@ -327,6 +350,10 @@ def parser() -> argparse.ArgumentParser:
     solve_parser.add_argument("--json", action="store_true", help="print the Result as JSON")
     solve_parser.add_argument("--verbose", action="store_true",
                               help="let the QP solver print its progress")
+
+
+def _penalty_sweep_command(scene_command: SceneCommand) -> None:
+    """The command penalty-sweep: ε from 1 to 1e20 N/m."""
     sweep_parser = scene_command("penalty-sweep", command_penalty_sweep,
                                  "penetration and contact force for ε = 1, 1e5, 1e6 … 1e20 N/m",
                                  STUDY_EXIT)
@@ -334,6 +361,10 @@ def parser() -> argparse.ArgumentParser:
     sweep_parser.add_argument("--contact", default="inequality", choices=CONTACT_KINDS)
     sweep_parser.add_argument("--json", action="store_true",
                               help="print the sweep as JSON (instead of the table and the chart)")
+
+
+def _curve_command(scene_command: SceneCommand) -> None:
+    """The command curve: the loads stepped from 0 to 1."""
     curve_parser = scene_command("curve", command_curve,
                                  "force-displacement curve: the loads stepped from 0 to 1",
                                  STUDY_EXIT)
@@ -342,9 +373,6 @@ def parser() -> argparse.ArgumentParser:
                               help="load factors from 0 to 1, both included (default %(default)s)")
     curve_parser.add_argument("--json", action="store_true",
                               help="print the curves as JSON (instead of the table and the chart)")
-    commands.add_parser("solvers", help="installed QP backends and solvers, and how to add more"
-                        ).set_defaults(handler=command_solvers)
-    return top
 
 
 NUMBER_OPTIONS = ("--penalty", "--relaxation", "--tolerance", "--max-iterations", "--gamma0",

@@ -22,9 +22,9 @@ import numpy as np
 from contactqp.batch import Batch, solve_batch, tiled_scene
 from contactqp.errors import OptionError, SceneError
 from contactqp.feasibility import equality_conflict, unheld_bars
+from contactqp.layout import TOPOLOGY
 from contactqp.methods import Method, cases, complementarity
 from contactqp.model import Model, build_model
-from contactqp.model.layout import TOPOLOGY
 from contactqp.progress import as_progress
 from contactqp.result import Result, make_result
 from contactqp.scene import MAX_ELEMENTS, Scene

@@ -98,20 +98,25 @@ def _draw(rng: np.random.Generator, max_bars: int, max_elements: int, contacts: 
             if len(gaps) == 2 and gaps[0] + gaps[1] < 0.0:  # room for the node: g₊ + g₋ >= 0
                 gaps[1] = -gaps[0] if rng.random() < 0.5 else abs(gaps[1]) + max(-gaps[0], 0.0)
             walls += [Wall(node, g, side, b) for g, side in zip(gaps, sides)]
-    between = []
-    if contacts and len(bars) > 1:
-        for _ in range(int(rng.integers(1, 3))):
-            a, b = (int(i) for i in rng.choice(len(bars), size=2, replace=False))
-            node_a, node_b = int(rng.integers(0, bars[a].n_nodes)), int(rng.integers(0, bars[b].n_nodes))
-            if any((c.bar_a, c.node_a, c.bar_b, c.node_b) == (a, node_a, b, node_b) for c in between):
-                continue
-            between.append(BarContact(a, node_a, b, node_b, _gap(rng, scale)))
+    between = _bar_contacts(rng, bars, scale) if contacts and len(bars) > 1 else []
     scene = Scene(loaded.bars, tuple(supports), loaded.loads, tuple(walls),
                   distributed=loaded.distributed, contacts=tuple(between))
     unheld = unheld_bars(scene) if floating > 0.0 else ""
     if unheld:
         raise SceneError(unheld)
     return scene
+
+
+def _bar_contacts(rng: np.random.Generator, bars: tuple, scale: float) -> list[BarContact]:
+    """One or two contacts between random nodes of two different bars, no pair twice."""
+    between: list[BarContact] = []
+    for _ in range(int(rng.integers(1, 3))):
+        a, b = (int(i) for i in rng.choice(len(bars), size=2, replace=False))
+        node_a, node_b = int(rng.integers(0, bars[a].n_nodes)), int(rng.integers(0, bars[b].n_nodes))
+        if any((c.bar_a, c.node_a, c.bar_b, c.node_b) == (a, node_a, b, node_b) for c in between):
+            continue
+        between.append(BarContact(a, node_a, b, node_b, _gap(rng, scale)))
+    return between
 
 
 __all__ = ["random_bar", "random_scene"]

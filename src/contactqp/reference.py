@@ -22,26 +22,14 @@ is certified to ``CERTIFICATE`` of the load and displacement scales.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from contactqp.errors import SceneError
+from contactqp.feasibility import unheld_bars
+from contactqp.reference_exact import Reference, rational_reference
 from contactqp.scene import Scene
 
 CERTIFICATE = 1e-13  # relative: the arithmetic is ~1e-19, this leaves room for n up to 1e6
-
-
-@dataclass(frozen=True)
-class Reference:
-    """The exact contact forces of a scene (N, one per contact row, scene order: walls, then
-    bar contacts), displacements (m, one per global node), the active sets solved and the
-    unit round-off used (0.0 for exact rational arithmetic)."""
-
-    contact_force: np.ndarray
-    displacement: np.ndarray
-    steps: int
-    precision: float
 
 
 def reference(scene: Scene, max_steps: int | None = None,
@@ -56,15 +44,11 @@ def reference(scene: Scene, max_steps: int | None = None,
     no certified answer is reached within them (and, on the rational path, its fallbacks),
     and for a scene beyond the rational path's reach (more than ``MAX_EXACT_NODES`` nodes).
     """
-    from contactqp.feasibility import unheld_bars
-
     unheld = unheld_bars(scene)
     if unheld:
         raise SceneError(unheld)
     if len(scene.bars) == 1 and not scene.contacts and scene.supports:
         return statics_reference(scene, max_steps, start)
-    from contactqp.reference_exact import rational_reference
-
     return rational_reference(scene, max_steps)
 
 

@@ -45,7 +45,6 @@ from itertools import combinations
 import numpy as np
 
 from contactqp.errors import SceneError
-from contactqp.reference import Reference
 from contactqp.scene import Scene
 
 # Exact arithmetic on a chain grows its numbers by ~53 bits per element, and a solve's cost
@@ -55,6 +54,19 @@ MAX_EXACT_NODES = 400
 # 10 rows on 40 nodes (seconds), 4 rows at MAX_EXACT_NODES.
 ENUMERATION_BUDGET = 2**10 * 40**2
 GROUND = -1  # the vertex of the supports in the graph of contact rows
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The answer of either exact path (this one, and contactqp.reference's statics, which
+    imports it from here: the two modules import one way). The exact contact forces of a scene (N, one per contact row, scene order: walls, then
+    bar contacts), displacements (m, one per global node), the active sets solved and the
+    unit round-off used (0.0 for exact rational arithmetic)."""
+
+    contact_force: np.ndarray
+    displacement: np.ndarray
+    steps: int
+    precision: float
 
 
 def solve_exact(equations: list[dict[int, Fraction]], rhs: list[Fraction]) -> list[Fraction]:

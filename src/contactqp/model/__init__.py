@@ -1,25 +1,14 @@
 """Scene → model: everything later stages need to know about the algebra.
 
-- :mod:`~contactqp.model.layout`: the numbering of the nodes and the arrays along the chain
-  (element stiffnesses, compliance, contact rows, nodal loads);
+- :mod:`contactqp.layout` (re-exported here, and as ``contactqp.model.layout``): the
+  numbering of the nodes and the arrays along the chain (element stiffnesses, compliance,
+  contact rows, nodal loads), and what is computed from them;
 - :mod:`~contactqp.model.chain`: the Model, K (band), P, C, g, the solves with K, the scales
   F and U;
 - :mod:`~contactqp.model.condense`: the problem condensed onto the contact nodes.
 """
 
-from contactqp.model.chain import (
-    Model,
-    build_model,
-    determinate_chain_solve,
-    displacement_scale,
-    displacement_scale_rule,
-    elongation_rows,
-    force_scale_rule,
-    wall_stiffness,
-    without_circulation,
-)
-from contactqp.model.condense import Condensed, condense
-from contactqp.model.layout import (
+from contactqp.layout import (
     ContactRows,
     Layout,
     bar_groups,
@@ -38,6 +27,18 @@ from contactqp.model.layout import (
     seen_stiffness,
     spread,
 )
+from contactqp.model.chain import (
+    Model,
+    build_model,
+    determinate_chain_solve,
+    displacement_scale,
+    displacement_scale_rule,
+    elongation_rows,
+    force_scale_rule,
+    wall_stiffness,
+    without_circulation,
+)
+from contactqp.model.condense import Condensed, condense
 
 __all__ = [
     "Condensed", "ContactRows", "Layout", "Model", "bar_groups", "build_model", "condense",

@@ -18,7 +18,7 @@ import scipy.sparse as sp
 
 from contactqp import linalg
 from contactqp.errors import SceneError, SolverError
-from contactqp.model.layout import Layout, largest
+from contactqp.layout import Layout, largest
 from contactqp.scene import Scene
 
 if TYPE_CHECKING:

@@ -19,8 +19,8 @@ import scipy.sparse as sp
 
 from contactqp import linalg
 from contactqp.errors import SolverError
+from contactqp.layout import Layout, node_set, spread
 from contactqp.model.chain import Model, displacement_scale
-from contactqp.model.layout import Layout, node_set, spread
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,11 +1,5 @@
-"""Charts (matplotlib only, never pyplot; never imported by ``contactqp/__init__``).
-
-Each function draws what it is given on a Figure of its own (no global state, no GUI backend)
-and returns its Axes or Figure. Every chart states its scene, its units and its methods, and
-marks what failed: a red × where a solve raised or failed its check, open markers where an
-answer was flagged. Artists a reader's script (or a test) may look for carry a ``gid``, e.g.
-``"undeformed bar 1 element 0"``, ``"wall 0"``, ``"contact 0 deformed"``.
-"""
+"""The bars: the undeformed and the deformed scene side by side, with supports, walls, bar
+contacts and loads, and the verdict of the check (:func:`plot_bar`)."""
 
 from __future__ import annotations
 
@@ -16,51 +10,19 @@ from functools import cached_property
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
-from matplotlib.transforms import blended_transform_factory
 
-from contactqp.curve import LoadPath
-from contactqp.methods.augmented import DEFAULT_MAX_ITERATIONS
-from contactqp.methods.penalty import TEXTBOOK_PENALTY
+from contactqp.plot.common import (
+    CONTACT,
+    LOAD,
+    SUPPORT,
+    WALL,
+    _axes,
+    engineering,
+    round_125,
+)
 from contactqp.result import Result
-from contactqp.studies import MeshConvergence, NitscheSweep, PenaltySweep, Run
-
-FLOOR = 1e-17  # errors of exactly 0 are drawn here, on a log axis
-FAILED = {"marker": "x", "color": "tab:red", "markersize": 9, "mew": 2, "ls": ""}
-PREFIXES = {-2: "µ", -1: "m", 0: "", 1: "k", 2: "M", 3: "G"}
-WALL, SUPPORT, LOAD, CONTACT = "tab:red", "black", "tab:green", "tab:purple"
-
-
-def _axes(ax: Axes | None, size: tuple[float, float] = (8, 3.5)) -> Axes:
-    """``ax``, or the axes of a new Figure (no pyplot: no global state, no GUI backend)."""
-    return Figure(figsize=size, layout="constrained").subplots() if ax is None else ax
-
-
-def round_125(value: float) -> float:
-    """The largest 1, 2 or 5 × 10ᵏ not above ``value`` (> 0): a magnification a reader can
-    take in at a glance (×500, not ×909)."""
-    power = 10.0 ** math.floor(math.log10(value))
-    return max(step * power for step in (1.0, 2.0, 5.0) if step * power <= value * (1 + 1e-12))
-
-
-def engineering(value: float, unit: str) -> str:
-    """``value`` with 4 significant digits and an SI prefix on ``unit``: '175.9 kN', '6 kN'."""
-    if value == 0.0 or not math.isfinite(value):
-        return f"{value:g} {unit}"
-    power = min(max(math.floor(math.log10(abs(value)) / 3), -2), 3)
-    return f"{value / 1000.0 ** power:.4g} {PREFIXES[power]}{unit}"
-
-
-def _failed_at_bottom(ax: Axes, x: np.ndarray, label: str | None) -> None:
-    """A red × at the bottom edge of ``ax`` for each x: a run that has no value to draw."""
-    if len(x):
-        ax.plot(x, np.full(len(x), 0.02), transform=blended_transform_factory(ax.transData,
-                ax.transAxes), clip_on=False, label=label, **FAILED)
-
-
-# --- the bars --------------------------------------------------------------------------------
 
 ROW_GAP = 0.6  # between the undeformed rows and the deformed ones, in rows
 THICKEST = 0.28  # half the height of the thickest element, in rows
@@ -276,9 +238,10 @@ def _draw_contacts(ax: Axes, sketch: _Sketch, deformed: bool) -> None:
         ax.plot([x[a]] * 2, [y[b] - reach, y[b] + reach], color=CONTACT, linewidth=2.2,
                 gid=f"contact {i} {state}")
         ax.plot([x[b]], [y[b]], "o", color=CONTACT, markersize=4)
-        if deformed:  # above the face; beside the lug, between the rows, when there is one
+        if deformed:  # above the face; beside the lug, at the face's top, when there is one
+            # (not halfway between the rows: a load arrow under bar a's node sits there)
             row = len(result.scene.walls) + i
-            at = (x[a], y[b] + reach) if y[a] == y[b] else (x[a], 0.5 * (y[a] + y[b]))
+            at = (x[a], y[b] + reach)
             _force_label(ax, sketch, result.contact_force[row], *at,
                          ha=None if y[a] == y[b] else "right")
 
@@ -393,237 +356,3 @@ def _bar_legend(result: Result) -> list:
         handles.append(Line2D([], [], color=CONTACT, linewidth=2.2, marker="o", markersize=4,
                               label="contact: face of node a, node b"))
     return handles
-
-
-# --- studies ---------------------------------------------------------------------------------
-
-def _run_marks(ax: Axes, x: np.ndarray, y: np.ndarray, runs: tuple[Run, ...], colour: str,
-               style: str, name: str, zero: bool = True) -> None:
-    """A line through the runs that ran, filled markers where verified, open where flagged,
-    and a red × at the bottom where the solve raised. Values of 0 are drawn at FLOOR, or
-    (``zero`` False: a penetration, where <= 0 means none) not at all."""
-    failed = np.array([r.result is None for r in runs]) | np.isnan(y)
-    ran = ~failed & (np.isfinite(y) if zero else y > 0.0)
-    good = ran & np.array([r.result is not None and r.result.verified for r in runs])
-    y = np.maximum(y, FLOOR)
-    ax.loglog(x[ran], y[ran], style, color=colour, label=name, marker="none")
-    ax.loglog(x[good], y[good], "o", color=colour, ls="", markersize=5)
-    ax.loglog(x[ran & ~good], y[ran & ~good], "o", color=colour, mfc="white", ls="",
-              markersize=6)
-    _failed_at_bottom(ax, x[failed], None)
-    if not ran.any():
-        ax.text(0.5, 0.6, "nothing to draw: no contact penetrates" if not zero else
-                "nothing to draw", transform=ax.transAxes, ha="center", color="0.3")
-
-
-def _study_legend_extras() -> list:
-    return [Line2D([], [], color="0.3", marker="o", ls="", label="verified"),
-            Line2D([], [], color="0.3", marker="o", mfc="white", ls="",
-                   label="flagged by the check"),
-            Line2D([], [], label="solve failed", **FAILED)]
-
-
-def plot_penalty_sweep(sweep: PenaltySweep) -> Figure:
-    """Over ε: the penalty's largest penetration (left); the relative contact-force error
-    against Lagrange multipliers of the penalty and of the augmented Lagrangian method at the
-    same ε (right), and below it the augmented method's number of multiplier updates, runs
-    stopped at the update cap in red. Dotted: the textbook ε (1e14 N/m, in the scene's units)
-    and the ε beyond which round-off takes over."""
-    figure = Figure(figsize=(12, 6), layout="constrained")
-    grid = figure.add_gridspec(2, 2, height_ratios=(3, 1.3))
-    left = figure.add_subplot(grid[:, 0])
-    right = figure.add_subplot(grid[0, 1])
-    updates = figure.add_subplot(grid[1, 1], sharex=right)
-    eps, unit = sweep.penalties, sweep.reference.scene.unit
-    for ax in (left, right):  # set first: a panel may have nothing to draw but the ε marks
-        ax.set(xscale="log", yscale="log", xlim=(eps.min() / 3, eps.max() * 3))
-    _run_marks(left, eps, sweep.penetration, sweep.runs, "tab:blue", "--", "penalty",
-               zero=False)
-    _run_marks(right, eps, sweep.force_error, sweep.runs, "tab:blue", "--", "penalty")
-    _run_marks(right, eps, sweep.augmented_error, sweep.augmented_runs, "tab:orange", "-",
-               "augmented Lagrangian")
-    _draw_updates(updates, eps, sweep)
-    textbook = TEXTBOOK_PENALTY * unit.metre
-    for ax in (left, right, updates):
-        ax.axvline(textbook, color="tab:green", linestyle=":", linewidth=1.5,
-                   label=f"textbook ε = {textbook:.0e} {unit.stiffness}" if ax is left else None)
-    _mark_round_off(right, sweep)
-    left.set(xlabel=f"penalty ε ({unit.stiffness})",
-             ylabel=f"largest penetration ({unit.length})",
-             title="penalty method: penetration ≈ contact force / ε")
-    right.set(ylabel="relative contact-force error",
-              title="contact-force error against Lagrange multipliers")
-    right.tick_params(labelbottom=False)
-    handles = [*right.get_legend_handles_labels()[0], *left.get_legend_handles_labels()[0][1:]]
-    left.legend(handles=[*handles, *_study_legend_extras()], fontsize=8, loc="lower left")
-    figure.suptitle(f"{sweep.reference.scene.name}: the penalty method and the augmented "
-                    f"Lagrangian over ε, {sweep.reference.contact} contact")
-    return figure
-
-
-def _draw_updates(ax: Axes, eps: np.ndarray, sweep: PenaltySweep) -> None:
-    """The augmented method's multiplier updates per ε; runs stopped at their cap in red."""
-    runs = sweep.augmented_runs
-    ran = np.array([r.result is not None for r in runs])
-    capped = np.array([r.result is not None and not r.result.claimed_success for r in runs])
-    n = sweep.augmented_iterations.astype(float)
-    ax.semilogx(eps[ran], n[ran], "o-", color="tab:orange", markersize=4)
-    ax.plot(eps[capped], n[capped], "s", color="tab:red", mfc="none", markersize=9,
-            mew=1.5, ls="", label="stopped at its cap: not converged")
-    _failed_at_bottom(ax, eps[~ran], None)
-    caps = {r.result.options.get("max_iterations", DEFAULT_MAX_ITERATIONS)
-            for r in runs if r.result is not None}
-    for cap in caps:
-        ax.axhline(cap, color="tab:red", linewidth=0.8, linestyle="--")
-    ax.set(xlabel=f"penalty ε ({sweep.reference.scene.unit.stiffness})",
-           ylabel="augmented: updates", ylim=(0, 1.15 * max(caps | {1})))
-    if capped.any():
-        ax.legend(fontsize=8, loc="upper right")
-
-
-def _mark_round_off(ax: Axes, sweep: PenaltySweep) -> None:
-    """The ε of the penalty's smallest error, or why there is none."""
-    if not np.any(sweep.reference.contact_force):
-        ax.text(0.5, 0.6, "no contact carries a force: every ε gives the free answer",
-                transform=ax.transAxes, ha="center", fontsize=9, color="0.3")
-        return
-    if np.any(np.isfinite(sweep.force_error)):
-        best = sweep.penalties[sweep.best]
-        ax.axvline(best, color="0.5", linestyle=":",
-                   label=f"penalty's best ε = {best:.0e}: round-off takes over beyond")
-
-
-def plot_nitsche_sweep(sweep: NitscheSweep) -> Figure:
-    """Two panels over γ₀, one line per θ: Nitsche's penetration, and its contact-force error
-    against Lagrange multipliers (filled markers: verified; open: flagged; red × at the
-    bottom: the solve was refused, e.g. the symmetric form below its threshold)."""
-    figure = Figure(figsize=(11, 4.6), layout="constrained")
-    left, right = figure.subplots(1, 2)
-    unit = sweep.reference.scene.unit
-    for i, theta in enumerate(sweep.thetas):
-        name, colour = f"θ = {theta:g}", f"C{i}"
-        for ax, values in ((left, sweep.penetration[i]), (right, sweep.force_error[i])):
-            ran = np.isfinite(values)
-            y = np.maximum(values, FLOOR)
-            ax.loglog(sweep.gamma0[ran], y[ran], "-", color=colour, label=name)
-            for ok, face in ((sweep.verified[i] & ran, colour), (~sweep.verified[i] & ran,
-                                                                 "white")):
-                ax.loglog(sweep.gamma0[ok], y[ok], "o", color=colour, mfc=face, ls="")
-            _failed_at_bottom(ax, sweep.gamma0[~ran], None)
-    left.set(xlabel="γ₀ (γ = γ₀·EA/h)", ylabel=f"largest penetration ({unit.length})",
-             title="penetration ≈ the end node's load / γ")
-    right.set(xlabel="γ₀ (γ = γ₀·EA/h)", ylabel="relative contact-force error",
-              title="contact-force error against Lagrange multipliers")
-    left.legend(handles=[*left.get_legend_handles_labels()[0], *_study_legend_extras()],
-                fontsize=8)
-    figure.suptitle(f"Nitsche's method over γ₀: {sweep.reference.scene.name}")
-    return figure
-
-
-def plot_mesh_convergence(study: MeshConvergence, ax: Axes | None = None) -> Axes:
-    """Lagrange multipliers' contact-force error against the continuum over the number of
-    elements of the default scene's tapered bar, both area rules, with an O(h²) guide through
-    the midpoint rule's first point; errors of exactly 0 drawn at 1e-17 as open markers."""
-    ax = _axes(ax, (6.5, 4.6))
-    n = study.elements
-    for rule, marker in (("midpoint", "o"), ("exact", "s")):
-        errors = study.errors[rule]
-        line, = ax.loglog(n, np.maximum(errors, FLOOR), f"{marker}-",
-                          label=f"area rule {rule!r}" + (": O(h²)" if rule == "midpoint"
-                                                         else ": exact to round-off"))
-        zero = errors == 0.0
-        ax.loglog(n[zero], np.full(zero.sum(), FLOOR), marker, mfc="white",
-                  color=line.get_color(), ls="", label="exactly 0" if zero.any() else None)
-    first = study.errors["midpoint"][0]
-    ax.loglog(n, first * (n[0] / n) ** 2, "k:", label="O(h²)")
-    ax.set_xlabel("elements")
-    ax.set_ylabel("relative contact-force error")
-    ax.set_title(f"default scene (tapered bar; continuum λ = "
-                 f"{engineering(study.exact_force, 'N')}):\nLagrange multipliers against the "
-                 "continuum", fontsize=10)
-    ax.legend(fontsize=8)
-    return ax
-
-
-# --- the load path ---------------------------------------------------------------------------
-
-LINE_STYLES = {"lagrange": ("k", "-", "o"), "equality": ("tab:red", "--", "v"),
-               "penalty": ("tab:green", "-.", "s"), "augmented": ("tab:cyan", ":", "D"),
-               "qp": ("tab:blue", (0, (1, 3)), "x"), "soft penalty": ("tab:purple", "-", "^")}
-
-
-def plot_load_path(path: LoadPath, kink: float | None = None) -> Figure:
-    """Over the load factor: the displacement of the load point (top) and the sum of the
-    contact forces (bottom), one line per method; markers staggered so that methods whose
-    curves coincide all show. A red × marks a step that failed its check, a red ring one
-    where a contact pulls (equality contact before the wall is reached); dotted: the
-    closed-form load factor ``kink`` at which the first contact closes. Methods that could
-    not solve the scene (:attr:`LoadPath.failed`) are named under the chart."""
-    figure = Figure(figsize=(8, 7), layout="constrained")
-    top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(3, 2))
-    t, unit = path.load_factor, path.scene.unit
-    n = len(path.methods)
-    for i, (name, method) in enumerate(path.methods.items()):
-        colour, dash, marker = LINE_STYLES.get(name, (f"C{i}", "-", "o"))
-        total = method.contact_force.sum(axis=1)
-        for ax, y in ((top, method.load_point_displacement), (bottom, total)):
-            ax.plot(t, y, color=colour, linestyle=dash, marker=marker, markevery=(i, n),
-                    markersize=6, mfc="none", linewidth=1.5, gid=f"curve {name}",
-                    label=f"{name}: {_describe(name, method)}")
-            _mark_steps(ax, t, y, method.verified, method.physical)
-    if kink is not None and np.isfinite(kink):
-        for ax in (top, bottom):
-            ax.axvline(kink, color="0.5", linestyle=":",
-                       label=f"first contact closes (closed form): t = {kink:.4g}"
-                       if ax is top else None)
-    layout = path.scene.layout
-    bar = int(layout.node_bar[path.load_node])
-    where = (f"node {path.load_node}" if len(path.scene.bars) == 1 else
-             f"bar {bar} node {path.load_node - int(layout.node_offsets[bar])}")
-    top.set_ylabel(f"displacement of {where} ({unit.length})")
-    bottom.set_ylabel(f"sum of contact forces ({unit.force})")
-    bottom.set_xlabel("load factor t (× every load of the scene)")
-    top.legend(handles=[*top.get_legend_handles_labels()[0], *_step_legend()], fontsize=8,
-               loc="upper left")
-    if path.failed:
-        top.set_title(textwrap.fill("no curve: " + "; ".join(
-            f"{name}: {why}" for name, why in path.failed.items()), 110), fontsize=8,
-            color="tab:red", loc="left")
-    figure.suptitle(f"load path: {path.scene.name}")
-    return figure
-
-
-CURVE_NAMES = {"lagrange": "Lagrange multipliers", "equality": "Lagrange, equality contact",
-               "penalty": "penalty, default ε", "augmented": "augmented Lagrangian"}
-
-
-def _describe(name: str, method) -> str:
-    """What a load path's method is, in words (its first step's method, solver and ε)."""
-    first = method.results[0]
-    if name in CURVE_NAMES:
-        return CURVE_NAMES[name]
-    if first.method == "penalty" and "penalty" in first.options:
-        unit = first.scene.unit.stiffness
-        return f"penalty, ε = {engineering(first.options['penalty'], unit)}"
-    return first.label
-
-
-def _mark_steps(ax: Axes, t: np.ndarray, y: np.ndarray, verified: np.ndarray,
-                physical: np.ndarray) -> None:
-    """A red × on the steps that failed their check, a red ring where a contact pulls."""
-    ax.plot(t[~verified], y[~verified], gid="failed steps", **FAILED)
-    pulls = verified & ~physical
-    ax.plot(t[pulls], y[pulls], "o", color="tab:red", mfc="none", markersize=10, ls="",
-            gid="pulling steps")
-
-
-def _step_legend() -> list:
-    return [Line2D([], [], label="step failed its check", **FAILED),
-            Line2D([], [], color="tab:red", marker="o", mfc="none", markersize=10, ls="",
-                   label="a contact pulls")]
-
-
-def save(chart: Axes | Figure, path) -> str:
-    """Write the figure (of the axes) as PNG; returns the path."""
-    (chart if isinstance(chart, Figure) else chart.figure).savefig(path, dpi=120)
-    return str(path)

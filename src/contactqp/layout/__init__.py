@@ -1,0 +1,29 @@
+"""A scene laid out as one chain of nodes (:mod:`~contactqp.layout.numbering`: the numbering
+and the arrays along the chain, :class:`Layout`) and what is computed from it
+(:mod:`~contactqp.layout.derived`: forces along the chain, seen stiffness, the force scales,
+bar grouping).
+"""
+
+from contactqp.layout.derived import (
+    bar_groups,
+    contact_forces_on_nodes,
+    count_up_to,
+    element_forces,
+    in_set,
+    largest,
+    link_forces,
+    load_force_scale,
+    load_force_terms,
+    node_set,
+    penetration,
+    run_ends,
+    run_starts,
+    seen_stiffness,
+    spread,
+)
+from contactqp.layout.numbering import TOPOLOGY, ContactRows, Layout
+
+__all__ = ["TOPOLOGY", "ContactRows", "Layout", "bar_groups", "contact_forces_on_nodes",
+           "count_up_to", "element_forces", "in_set", "largest", "link_forces",
+           "load_force_scale", "load_force_terms", "node_set", "penetration", "run_ends",
+           "run_starts", "seen_stiffness", "spread"]

@@ -1,0 +1,385 @@
+"""A scene laid out as one chain of nodes: the numbering and the per-element and per-node
+arrays every later stage reads (the model, the methods' helpers, the check, the reference and
+the charts), computed once per scene.
+
+The nodes of every bar are numbered in one sequence, bar after bar (:meth:`Layout.node`); no
+element joins the last node of one bar to the first node of the next, so the chain has a
+*junction* there (no element, zero stiffness). Contact rows: one per wall in scene order, then
+one per bar contact, each written sign·u_node <= gap (a wall) or u_a − u_b <= gap (a bar
+contact), with λ >= 0 the force with which the wall (the other bar) pushes.
+
+What is computed from the numbering and these arrays (forces along the chain, seen stiffness,
+the force scales, bar grouping) is :mod:`contactqp.layout.derived`'s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+
+from contactqp.feasibility import tight_cycles
+from contactqp.layout.derived import _read_only, load_force_scale, seen_stiffness, wall_arrays
+
+if TYPE_CHECKING:  # a Scene makes its layout: the layout reads it, never imports it
+    from contactqp.scene import Scene
+
+
+class ContactRows(NamedTuple):
+    """The contact rows C u <= g as (row, node, coefficient) of every nonzero of C in global
+    node numbering (a wall has one, a bar contact two: +1 at a, −1 at b), and g per row."""
+
+    row: np.ndarray
+    node: np.ndarray
+    coefficient: np.ndarray
+    gap: np.ndarray
+
+
+# The Layout's arrays that depend on the bars, the supports and where the loads and contacts
+# sit, but not on the load values or the gaps: shared by Layout.with_values
+TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_position",
+            "element_bar_ends", "opposed_entries", "support_mask", "junctions",
+            "element_stiffness", "areas", "yield_stress", "compliance", "chained_compliance",
+            "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes",
+            "longest_bar", "row_compliance", "row_bars", "floating_bars")
+
+
+def _gaps(scene: Scene) -> np.ndarray:
+    """g, the gap of every contact row: the walls, then the bar contacts."""
+    items = scene.walls + scene.contacts
+    return np.fromiter((item.gap for item in items), float, len(items))
+
+
+@dataclass(frozen=True, eq=False)
+class Layout:
+    """The numbering of a scene's nodes and the arrays along it (module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene to number.
+    """
+
+    scene: Scene
+
+    def with_values(self, scene: Scene) -> Layout:
+        """The layout of ``scene``, which differs from this one's only in its load values and
+        gaps (:meth:`Scene.with_values`): every array that does not depend on them
+        (:data:`TOPOLOGY`, and the contact rows but their gaps) is shared, not made again."""
+        layout = Layout(scene)
+        for name in TOPOLOGY:
+            if name in self.__dict__:
+                layout.__dict__[name] = self.__dict__[name]
+        if "rows" in self.__dict__:
+            layout.__dict__["rows"] = self.rows._replace(gap=_read_only(_gaps(scene)))
+        return layout
+
+    @cached_property
+    def node_offsets(self) -> np.ndarray:
+        """Global number of each bar's node 0, and the total node count last."""
+        return np.concatenate(([0], np.cumsum([b.n_nodes for b in self.scene.bars])))
+
+    def node(self, bar: int, node: int) -> int:
+        """The number of node ``node`` of bar ``bar`` in the one node sequence."""
+        return int(self.node_offsets[bar]) + int(node)
+
+    def bar_of(self, nodes: np.ndarray) -> np.ndarray:
+        """The bar of each of ``nodes`` (global)."""
+        if len(self.scene.bars) == 1:
+            return np.zeros(np.shape(nodes), dtype=np.intp)
+        return self.node_bar[nodes]
+
+    @cached_property
+    def row_bars(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per contact row, (the bar it stops moving in +x, the bar it stops moving in −x),
+        −1 for the ground (a wall's fixed side): a "+" wall on bar w is (w, −1), a "−" wall
+        (−1, w), a bar contact from a to b (a, b) (u_a − u_b <= g stops a moving towards b in
+        +x, and b towards a in −x)."""
+        scene = self.scene
+        ahead = [w.bar if w.side == "+" else -1 for w in scene.walls]
+        behind = [w.bar if w.side == "-" else -1 for w in scene.walls]
+        ahead += [c.bar_a for c in scene.contacts]
+        behind += [c.bar_b for c in scene.contacts]
+        return (_read_only(np.array(ahead, dtype=np.intp)),
+                _read_only(np.array(behind, dtype=np.intp)))
+
+    @cached_property
+    def bar_loads(self) -> np.ndarray:
+        """The net load on each bar (N, +x): its nodal loads summed."""
+        return np.add.reduceat(self.nodal_loads, self.node_offsets[:-1])
+
+    @cached_property
+    def node_bar(self) -> np.ndarray:
+        """The bar of every global node."""
+        return _read_only(np.repeat(np.arange(len(self.scene.bars)), np.diff(self.node_offsets)))
+
+    @cached_property
+    def bar_ends(self) -> tuple[np.ndarray, np.ndarray]:
+        """(first node, last node) of every global node's bar."""
+        sizes = np.diff(self.node_offsets)
+        return (_read_only(np.repeat(self.node_offsets[:-1], sizes)),
+                _read_only(np.repeat(self.node_offsets[1:] - 1, sizes)))
+
+    @cached_property
+    def elements(self) -> tuple[np.ndarray, np.ndarray]:
+        """(the links that are elements, as the global node each starts at; their
+        compliance 1/k): every link but the junctions between bars."""
+        element = np.flatnonzero(self.link_stiffness > 0.0)
+        return _read_only(element), _read_only(1.0 / self.link_stiffness[element])
+
+    @cached_property
+    def element_position(self) -> np.ndarray:
+        """For every global node j, the index in :attr:`elements` of the first element
+        starting at or after j (np.searchsorted, once per scene)."""
+        return _read_only(np.searchsorted(self.elements[0], np.arange(self.n_nodes)))
+
+    @cached_property
+    def element_bar_ends(self) -> tuple[np.ndarray, np.ndarray]:
+        """(first node, last node) of the bar of every element (:attr:`elements`)."""
+        element = self.elements[0]
+        return _read_only(self.bar_ends[0][element]), _read_only(self.bar_ends[1][element])
+
+    @cached_property
+    def opposed_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The entries of C that act alone on a free node (a wall, or a bar contact with its
+        other end at a support), at the nodes that have such entries pushing both ways: (nodes
+        and rows pushing in −x, nodes and rows pushing in +x)."""
+        rows, nodes, coefficients, gaps = self.rows
+        free = ~self.support_mask[nodes]
+        single = free & (np.bincount(rows[free], minlength=gaps.size)[rows] == 1)
+        up, down = single & (coefficients > 0), single & (coefficients < 0)
+        both = np.zeros(self.n_nodes, dtype=bool)
+        both[nodes[up]] = True
+        both &= np.bincount(nodes[down], minlength=self.n_nodes) > 0
+        up &= both[nodes]
+        down &= both[nodes]
+        return (_read_only(nodes[up]), _read_only(rows[up]), _read_only(nodes[down]),
+                _read_only(rows[down]))
+
+    @cached_property
+    def running_load(self) -> np.ndarray:
+        """S_j = Σ_(i<=j) P_i, the nodal loads summed over the chain (N)."""
+        return _read_only(np.cumsum(self.nodal_loads))
+
+    @cached_property
+    def compliance_load(self) -> np.ndarray:
+        """1/k of each link times the running load at its start (:attr:`running_load`), 0 past
+        the last node (inf × 0 at a junction is left NaN: never summed over)."""
+        with np.errstate(invalid="ignore"):
+            return _read_only(self.link_compliance * np.append(self.running_load[:-1], 0.0))
+
+    @cached_property
+    def load_scale(self) -> float:
+        """:func:`load_force_scale`, once per scene."""
+        return load_force_scale(self)
+
+    @cached_property
+    def press_fit_force(self) -> float:
+        """The largest force that pushes a press fit apart (a wall that starts past its node,
+        or two bars that start into each other: gap < 0): abs(gap) × the stiffness the row sees
+        with the supports held (N); 0 without one."""
+        return float(np.max(self.press_fit_forces, initial=0.0))
+
+    @cached_property
+    def press_fit_forces(self) -> np.ndarray:
+        """Per contact row, the force that pushes its press fit apart (:attr:`press_fit_force`):
+        for a wall its node's seen stiffness, for a bar contact its two ends' in series (a
+        supported end is rigid); 0 for a row with gap >= 0."""
+        gaps = self.rows.gap
+        forces = np.zeros(gaps.size)
+        press = gaps < 0.0
+        if press.any():
+            with np.errstate(divide="ignore"):
+                forces[press] = -gaps[press] / self.row_compliance[press]
+        return _read_only(forces)
+
+    @cached_property
+    def row_compliance(self) -> np.ndarray:
+        """Per contact row, the compliance it sees with the supports held (m/N): a wall's
+        node's 1/s, a bar contact's two ends' in series (a supported end adds nothing)."""
+        rows, nodes, _, gaps = self.rows
+        entry = ~self.support_mask[nodes]
+        stiffness = seen_stiffness(self, np.zeros(0, dtype=np.intp), nodes[entry])
+        with np.errstate(divide="ignore"):
+            return _read_only(np.bincount(rows[entry], 1.0 / stiffness, minlength=gaps.size))
+
+    @cached_property
+    def support_mask(self) -> np.ndarray:
+        """Whether each global node is held by a support."""
+        mask = np.zeros(self.n_nodes, dtype=bool)
+        mask[self.support_nodes] = True
+        return _read_only(mask)
+
+    @cached_property
+    def walls_by_side(self) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+        """Per side (+1: u <= gap, −1: −u <= gap): the gap of the wall at every global node
+        (inf where none) and its row (−1 where none). A scene has at most one wall per node
+        and side (contactqp.scene refuses more); walls at supports are left out."""
+        return wall_arrays(self)
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.node_offsets[-1])
+
+    @property
+    def n_elements(self) -> int:
+        return self.n_nodes - len(self.scene.bars)
+
+    @property
+    def n_contacts(self) -> int:
+        return self.scene.n_contacts
+
+    @cached_property
+    def junctions(self) -> np.ndarray:
+        """Links j (between global nodes j and j + 1) that no element spans: a bar's last
+        node and the next bar's first."""
+        return self.node_offsets[1:-1] - 1
+
+    def _per_element(self, values: list[np.ndarray]) -> np.ndarray:
+        return _read_only(np.concatenate(values))
+
+    @cached_property
+    def element_stiffness(self) -> np.ndarray:
+        """k_e = E·A/L of every element, bar after bar (N/m)."""
+        return self._per_element([b.element_stiffness for b in self.scene.bars])
+
+    @cached_property
+    def areas(self) -> np.ndarray:
+        """Area of every element, bar after bar."""
+        return self._per_element([b.areas for b in self.scene.bars])
+
+    @cached_property
+    def yield_stress(self) -> np.ndarray | None:
+        """Yield stress of every element (NaN on a bar without one), None if no bar has one."""
+        bars = self.scene.bars
+        if all(b.yield_stress is None for b in bars):
+            return None
+        return self._per_element([np.full(b.n_elements, np.nan if b.yield_stress is None
+                                          else b.yield_stress) for b in bars])
+
+    @cached_property
+    def longest_bar(self) -> float:
+        """The length of the longest bar (m)."""
+        bars = {id(b): b for b in self.scene.bars}.values()  # a bar repeated counts once
+        return max(float(b.lengths.sum()) for b in bars)
+
+    @cached_property
+    def compliance(self) -> np.ndarray:
+        """Σ L/(EA) from its bar's node 0 to every node (m/N), bar after bar."""
+        return self._per_element([b.compliance for b in self.scene.bars])
+
+    @cached_property
+    def chained_compliance(self) -> np.ndarray:
+        """φ strictly increasing over the whole chain: each bar's :attr:`compliance`, shifted
+        past the bar before by twice that bar's own (no node lies between bars), for
+        interpolating along the chain (:func:`spread`)."""
+        totals = np.array([b.compliance[-1] for b in self.scene.bars])
+        shift = np.concatenate(([0.0], np.cumsum(2.0 * totals)))[:-1]
+        return _read_only(self.compliance + np.repeat(shift, np.diff(self.node_offsets)))
+
+    @cached_property
+    def link_compliance(self) -> np.ndarray:
+        """1/k of the link from global node j to j + 1 (m/N), inf at a junction, and one 0
+        past the last node (for sums between nodes with numpy reduceat)."""
+        with np.errstate(divide="ignore"):
+            return _read_only(np.append(1.0 / self.link_stiffness, 0.0))
+
+    @cached_property
+    def link_stiffness(self) -> np.ndarray:
+        """The stiffness between global nodes j and j + 1 (N/m): the element's, 0 at a
+        junction."""
+        return _read_only(np.insert(self.element_stiffness,
+                                    self.junctions - np.arange(self.junctions.size), 0.0))
+
+    @cached_property
+    def node_x(self) -> np.ndarray:
+        """x of every node, for drawing: each bar starts where the one before ends."""
+        xs, start = [], 0.0
+        for b in self.scene.bars:
+            xs.append(start + b.node_x)
+            start = float(xs[-1][-1])
+        return _read_only(np.concatenate(xs))
+
+    @cached_property
+    def floating_bars(self) -> np.ndarray:
+        """The bars with no support, held only by their walls and bar contacts (K is then
+        only positive semidefinite: each such bar can move as a whole), in order."""
+        supported = np.zeros(len(self.scene.bars), dtype=bool)
+        supported[self.node_bar[self.support_nodes]] = True
+        return _read_only(np.flatnonzero(~supported))
+
+    @cached_property
+    def support_nodes(self) -> np.ndarray:
+        """Global node of each support, in scene order."""
+        return _read_only(np.array([self.node(s.bar, s.node) for s in self.scene.supports],
+                                   dtype=np.intp))
+
+    @cached_property
+    def load_nodes(self) -> np.ndarray:
+        """Global node of each point load, in scene order."""
+        return _read_only(np.array([self.node(p.bar, p.node) for p in self.scene.loads],
+                                   dtype=np.intp))
+
+    @cached_property
+    def rows(self) -> ContactRows:
+        """The contact rows (:class:`ContactRows`)."""
+        walls, contacts = self.scene.walls, self.scene.contacts
+        n_walls, n_contacts = len(walls), len(contacts)
+        offsets = self.node_offsets
+
+        def column(items: tuple, name: str, dtype: type) -> np.ndarray:
+            return np.fromiter((getattr(item, name) for item in items), dtype=dtype,
+                               count=len(items))
+
+        wall_nodes = offsets[column(walls, "bar", np.intp)] + column(walls, "node", np.intp)
+        a = offsets[column(contacts, "bar_a", np.intp)] + column(contacts, "node_a", np.intp)
+        b = offsets[column(contacts, "bar_b", np.intp)] + column(contacts, "node_b", np.intp)
+        signs = np.where(np.fromiter((w.side == "+" for w in walls), dtype=bool,
+                                     count=n_walls), 1.0, -1.0)
+        return ContactRows(
+            _read_only(np.concatenate((np.arange(n_walls), n_walls + np.arange(n_contacts),
+                                       n_walls + np.arange(n_contacts))).astype(np.intp)),
+            _read_only(np.concatenate((wall_nodes, a, b)).astype(np.intp)),
+            _read_only(np.concatenate((signs, np.ones(n_contacts), -np.ones(n_contacts)))),
+            _read_only(_gaps(self.scene)))
+
+    @property
+    def gaps(self) -> np.ndarray:
+        """g: the gap of every contact row."""
+        return self.rows.gap
+
+    @cached_property
+    def distributed_nodal_loads(self) -> np.ndarray:
+        """The distributed loads' consistent nodal forces per global node (N): each element
+        passes intensity × length / 2 to each of its two nodes."""
+        p = np.zeros(self.n_nodes)
+        for q in self.scene.distributed:
+            bar = self.scene.bars[q.bar]
+            stop = bar.n_elements if q.stop is None else q.stop
+            half = 0.5 * float(q.intensity) * bar.lengths[q.start:stop]
+            first = self.node(q.bar, q.start)
+            p[first:first + half.size] += half
+            p[first + 1:first + 1 + half.size] += half
+        return _read_only(p)
+
+    @cached_property
+    def nodal_loads(self) -> np.ndarray:
+        """The point loads and the distributed loads' nodal forces summed per global node (N)."""
+        p = self.distributed_nodal_loads.copy()
+        np.add.at(p, self.load_nodes, np.array([q.force for q in self.scene.loads], dtype=float))
+        return _read_only(p)
+
+    def load_point(self) -> int:
+        """The global node whose displacement a load path follows: the first point load's
+        node, else the node with the largest nodal load."""
+        if self.scene.loads:
+            return int(self.load_nodes[0])
+        return int(np.abs(self.nodal_loads).argmax())
+
+    @cached_property
+    def tight_cycles(self) -> tuple[tuple[int, ...], ...]:
+        """The contact rows of every one-way loop through a bar contact whose gaps add up to
+        zero (:func:`contactqp.feasibility.tight_cycles`)."""
+        return tight_cycles(self.scene)

@@ -1,0 +1,212 @@
+"""The :class:`Scene`: bars with their supports, loads, walls and bar contacts, in one unit
+system, checked together when it is built (contactqp.scene.validation, and
+contactqp.feasibility for whether the walls and contacts leave every node a position and
+determine the contact forces); :func:`row_names`, how messages name its contact rows.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, replace
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from contactqp.errors import OptionError, SceneError
+from contactqp.feasibility import impossible_constraints, indeterminate_contacts
+from contactqp.layout import Layout
+from contactqp.scene.parts import (
+    MAX_ELEMENTS,
+    Bar,
+    BarContact,
+    DistributedLoad,
+    Load,
+    Support,
+    Wall,
+)
+from contactqp.scene.validation import (
+    _check_contacts,
+    _check_loads,
+    _check_supports,
+    _check_walls,
+    _numbering,
+)
+from contactqp.units import UNIT_SYSTEMS, Units
+from contactqp.values import number, one_of, text, value_array
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """Bars with supports, loads, rigid walls and bar-to-bar contacts, checked on construction.
+
+    ``bars``: one :class:`Bar` or a sequence of them (kept as a tuple either way). A bar
+    with no support is held by its walls and bar contacts alone; its loads must press it
+    against them (checked at the solve, :func:`contactqp.feasibility.unheld_bars`). Contact rows, in this order everywhere (contact forces, penetrations):
+    one per wall, then one per bar contact. ``units``: :data:`UNIT_SYSTEMS`.
+
+    Parameters
+    ----------
+    bars : Bar or sequence of Bar
+        The bars, numbered 0, 1, … in this order.
+    supports : sequence of Support
+        The nodes held at u = 0.
+    loads : sequence of Load
+        The point loads.
+    walls : sequence of Wall
+        The rigid walls.
+    name : str
+        How tables, charts and messages name the scene.
+    distributed : sequence of DistributedLoad
+        The uniform axial loads.
+    contacts : sequence of BarContact
+        The contacts between bars.
+    units : str
+        ``"SI"`` (m, m², N, Pa; the default) or ``"mm-N-MPa"``.
+
+    Raises
+    ------
+    SceneError
+        A bad value, a reference to a bar or node that does not exist, or constraints that leave
+        a node no position (one line naming the field and the value).
+    """
+
+    bars: tuple[Bar, ...]
+    supports: tuple[Support, ...]
+    loads: tuple[Load, ...] = ()
+    walls: tuple[Wall, ...] = ()
+    name: str = "scene"
+    distributed: tuple[DistributedLoad, ...] = ()
+    contacts: tuple[BarContact, ...] = ()
+    units: str = "SI"
+
+    def __post_init__(self) -> None:
+        for key, kind, plural in (("bars", Bar, "bar"), ("supports", Support, "support"),
+                                  ("loads", Load, "load"), ("walls", Wall, "wall"),
+                                  ("distributed", DistributedLoad, "distributed_load"),
+                                  ("contacts", BarContact, "contact")):
+            object.__setattr__(self, key, _items(getattr(self, key), kind, plural))
+        if not self.bars:
+            raise SceneError("bar: no bar; give at least one [bar]")
+        text("name", self.name)
+        one_of("units", self.units, UNIT_SYSTEMS)
+        total = sum(b.n_elements for b in self.bars)
+        if total > MAX_ELEMENTS:
+            raise SceneError(f"bar: {total} elements in all; contactqp takes at most "
+                             f"{MAX_ELEMENTS} in a scene")
+        node = _numbering(self.bars)
+        held = _check_supports(self, node)
+        _check_loads(self, node)
+        walls = _check_walls(self, node, held)
+        _check_contacts(self, node, held, walls)
+        conflict = impossible_constraints(self) or indeterminate_contacts(self)
+        if conflict:
+            raise SceneError(conflict)
+
+    @cached_property
+    def layout(self) -> Layout:
+        """The numbering of the scene's nodes and the arrays along it
+        (:class:`~contactqp.model.Layout`), made once per scene: a scene does not change."""
+        return Layout(self)
+
+    @property
+    def unit(self) -> Units:
+        """The scene's unit system (:data:`UNIT_SYSTEMS`)."""
+        return UNIT_SYSTEMS[self.units]
+
+    @property
+    def n_contacts(self) -> int:
+        """Contact rows: one per wall, then one per bar contact."""
+        return len(self.walls) + len(self.contacts)
+
+    @property
+    def n_elements(self) -> int:
+        """Elements of every bar together."""
+        return sum(b.n_elements for b in self.bars)
+
+    def with_loads(self, loads: tuple[Load, ...],
+                   distributed: tuple[DistributedLoad, ...] | None = None) -> Scene:
+        """The same scene with other loads (point, and distributed when given)."""
+        return replace(self, loads=tuple(loads),
+                       distributed=self.distributed if distributed is None else tuple(distributed))
+
+    def scaled_loads(self, factor: float) -> Scene:
+        """The same scene with every load (point and distributed) times ``factor``."""
+        factor = number("load factor", factor)
+        return self.with_loads(tuple(replace(p, force=factor * p.force) for p in self.loads),
+                               tuple(replace(q, intensity=factor * q.intensity)
+                                     for q in self.distributed))
+
+    def with_walls(self, walls: tuple[Wall, ...]) -> Scene:
+        """The same scene with other walls."""
+        return replace(self, walls=tuple(walls))
+
+    def with_values(self, loads: Any = None, gaps: Any = None) -> Scene:
+        """The same scene with other load values and gaps, everything else kept: ``loads``
+        one per point load (force) then one per distributed load (force per length), in
+        scene order; ``gaps`` one per contact row (the walls, then the bar contacts); in the
+        scene's units; None keeps them. The new scene is checked as any scene is (gaps that
+        leave a node no position are refused); its layout shares every array that does not
+        depend on the values with this scene's (:meth:`Layout.with_values`)."""
+        changes: dict[str, tuple] = {}
+        if loads is not None:
+            n_point = len(self.loads)
+            values = value_array("loads", loads, (n_point + len(self.distributed),),
+                                 "one per point load, then one per distributed load",
+                                 OptionError)
+            changes["loads"] = _valued(self.loads, "force", values[:n_point])
+            changes["distributed"] = _valued(self.distributed, "intensity", values[n_point:])
+        if gaps is not None:
+            n_walls = len(self.walls)
+            values = value_array("gaps", gaps, (self.n_contacts,),
+                                 "one per wall, then one per bar contact", OptionError)
+            changes["walls"] = _valued(self.walls, "gap", values[:n_walls])
+            changes["contacts"] = _valued(self.contacts, "gap", values[n_walls:])
+        if not changes:
+            return self
+        # the bars, supports and where everything sits are this scene's, already checked, and
+        # the values were checked above: only what gaps decide is checked again
+        scene = copy.copy(self)
+        scene.__dict__.pop("layout", None)
+        for name, value in changes.items():
+            object.__setattr__(scene, name, value)
+        if gaps is not None:
+            conflict = impossible_constraints(scene) or indeterminate_contacts(scene)
+            if conflict:
+                raise SceneError(conflict)
+        if "layout" in self.__dict__:
+            scene.__dict__["layout"] = self.layout.with_values(scene)
+        return scene
+
+
+def row_names(scene: Scene) -> list[str]:
+    """The name of each contact row as the scene file and the messages name it: wall[i] for
+    the walls, then contact[j] for the bar contacts."""
+    return ([f"wall[{i}]" for i in range(len(scene.walls))]
+            + [f"contact[{j}]" for j in range(len(scene.contacts))])
+
+
+def _valued(items: tuple, name: str, values: np.ndarray) -> tuple:
+    """``items`` (frozen dataclasses, already checked) with field ``name`` set to ``values``
+    (checked numbers): copies made field by field, 4x faster than dataclasses.replace, which
+    runs __init__ again (a batch of 10⁴ cases makes 10⁴ of them)."""
+    made = []
+    for item, value in zip(items, values.tolist()):
+        copy_ = object.__new__(type(item))
+        copy_.__dict__.update(item.__dict__)
+        copy_.__dict__[name] = value
+        made.append(copy_)
+    return tuple(made)
+
+
+def _items(values: Any, kind: type, name: str) -> tuple:
+    """``values`` (one ``kind`` or a sequence of them) as a tuple, else a SceneError."""
+    if isinstance(values, kind):
+        return (values,)
+    if isinstance(values, (str, bytes)) or not isinstance(values, (tuple, list)):
+        raise SceneError(f"{name} must be a contactqp.{kind.__name__} or a list of them, "
+                         f"got {values!r}")
+    for i, value in enumerate(values):
+        if not isinstance(value, kind):
+            raise SceneError(f"{name}[{i}] must be a contactqp.{kind.__name__}, got {value!r}")
+    return tuple(values)

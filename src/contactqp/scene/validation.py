@@ -1,0 +1,120 @@
+"""The checks a :class:`~contactqp.scene.Scene` runs on its parts together: every bar and node
+a support, load, wall or contact names exists, nothing is held twice, every bar is held by
+something. Each error names the field as a scene file spells it, and the value.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from contactqp.errors import SceneError
+from contactqp.scene.parts import WALL_SIDES, Bar
+from contactqp.values import number, whole_number
+
+if TYPE_CHECKING:
+    from contactqp.scene.scene import Scene
+
+
+def _numbering(bars: tuple[Bar, ...]):
+    """A function (field name, bar, node, suffix) -> the node's number in the scene's one node
+    sequence (bar after bar), or a SceneError naming the field."""
+    offsets = np.concatenate(([0], np.cumsum([b.n_nodes for b in bars])))
+
+    def node(name: str, bar: Any, value: Any, suffix: str = "") -> int:
+        b = whole_number(f"{name}.bar{suffix}", bar, 0, "bar number")
+        if b >= len(bars):
+            raise SceneError(f"{name}.bar{suffix} = {b}: the scene has bars 0 to {len(bars) - 1}")
+        n = whole_number(f"{name}.node{suffix}", value, None, "node number")
+        if not 0 <= n < bars[b].n_nodes:
+            owner = "the bar" if len(bars) == 1 else f"bar[{b}]"
+            raise SceneError(f"{name}.node{suffix} = {n}: {owner} has nodes 0 to "
+                             f"{bars[b].n_nodes - 1}")
+        return int(offsets[b]) + n
+
+    return node
+
+
+def _check_supports(scene: Scene, node) -> dict[int, int]:
+    """No node held twice, not every node held, and something to hold a bar that has no
+    support (a wall or a bar contact: whether its loads press it against one is decided with
+    the contact kind, :func:`contactqp.feasibility.unheld_bars`): {node: support index}."""
+    held: dict[int, int] = {}
+    for i, s in enumerate(scene.supports):
+        at = node(f"support[{i}]", s.bar, s.node)
+        if at in held:
+            raise SceneError(f"support[{i}].node = {s.node} repeats support[{held[at]}]")
+        held[at] = i
+    touched = {w.bar for w in scene.walls} | {c.bar_a for c in scene.contacts} | {
+        c.bar_b for c in scene.contacts}
+    for b in sorted(set(range(len(scene.bars))) - {s.bar for s in scene.supports} - touched):
+        raise SceneError(f"support: bar[{b}] has no support, no wall and no contact: nothing "
+                         "holds it; give it a [[support]]")
+    if len(held) == sum(b.n_nodes for b in scene.bars):
+        raise SceneError("support: every node is a support; nothing can move")
+    return held
+
+
+def _check_loads(scene: Scene, node) -> None:
+    """Point loads on nodes, distributed loads on elements of a bar, all finite numbers."""
+    for i, load in enumerate(scene.loads):
+        node(f"load[{i}]", load.bar, load.node)
+        number(f"load[{i}].force", load.force, tiny=True)
+    for i, q in enumerate(scene.distributed):
+        name = f"distributed_load[{i}]"
+        number(f"{name}.intensity", q.intensity, tiny=True)
+        b = whole_number(f"{name}.bar", q.bar, 0, "bar number")
+        if b >= len(scene.bars):
+            raise SceneError(f"{name}.bar = {b}: the scene has bars 0 to {len(scene.bars) - 1}")
+        n_elements = scene.bars[b].n_elements
+        stop = n_elements if q.stop is None else q.stop
+        for key, value in (("start", q.start), ("stop", stop)):
+            whole_number(f"{name}.{key}", value, None, "element number")
+        if not 0 <= q.start < stop <= n_elements:
+            raise SceneError(f"{name}: elements start = {q.start} to stop = {stop} (exclusive) "
+                             f"must satisfy 0 <= start < stop <= {n_elements}")
+
+
+def _check_walls(scene: Scene, node, held: dict[int, int]) -> dict[tuple[int, str], int]:
+    """Walls on free nodes, one per side of a node: {(node, side): wall index}."""
+    seen: dict[tuple[int, str], int] = {}
+    for i, wall in enumerate(scene.walls):
+        at = node(f"wall[{i}]", wall.bar, wall.node)
+        number(f"wall[{i}].gap", wall.gap, tiny=True)
+        if wall.side not in WALL_SIDES:
+            raise SceneError(f"wall[{i}].side must be '+' or '-', got {wall.side!r}")
+        if at in held:
+            raise SceneError(f"wall[{i}].node = {wall.node} is support[{held[at]}]: a wall "
+                             "there carries no force")
+        if (at, wall.side) in seen:
+            raise SceneError(f"wall[{i}] repeats wall[{seen[at, wall.side]}] (node {wall.node}, "
+                             f"side {wall.side!r}): keep the one with the smaller gap")
+        seen[at, wall.side] = i
+    return seen
+
+
+def _check_contacts(scene: Scene, node, held: dict[int, int],
+                    walls: dict[tuple[int, str], int]) -> None:
+    """Contacts between two nodes, not both held, none repeating another or a wall."""
+    pairs: dict[tuple[int, int], int] = {}
+    for i, c in enumerate(scene.contacts):
+        a = node(f"contact[{i}]", c.bar_a, c.node_a, suffix="_a")
+        b = node(f"contact[{i}]", c.bar_b, c.node_b, suffix="_b")
+        number(f"contact[{i}].gap", c.gap, tiny=True)
+        if c.bar_a == c.bar_b:  # its own elements already join the two nodes
+            raise SceneError(f"contact[{i}]: bar_a = bar_b = {c.bar_a}; a bar contact joins "
+                             "two different bars (a wall holds a node of one bar)")
+        if a in held and b in held:
+            raise SceneError(f"contact[{i}]: both nodes are supports; the contact carries no force")
+        if (a, b) in pairs:
+            raise SceneError(f"contact[{i}] repeats contact[{pairs[a, b]}]: keep the one with "
+                             "the smaller gap")
+        pairs[a, b] = i
+        if a in held or b in held:  # one end held: a wall on the other end
+            free, side = (b, "-") if a in held else (a, "+")
+            if (free, side) in walls:
+                raise SceneError(
+                    f"contact[{i}] holds its free end like a {side!r} wall (its other end is "
+                    f"a support) and repeats wall[{walls[free, side]}]: keep the one with the "
+                    "smaller gap")
