@@ -68,3 +68,32 @@ html_theme_options = {
     "show_toc_level": 2,
 }
 html_static_path: list[str] = []
+
+
+# The figures the README and the how-to pages show (docs/load_path.png, docs/nitsche_sweep.png)
+# are drawn here at every build, by the command line as a user runs it (`contactqp curve`, and
+# `contactqp`, the main job), so that a change to a chart or to the library shows up in them:
+# the README reads the committed files, which the last build rewrote.
+CLI_FIGURES = {"load_path.png": ["curve"], "nitsche_sweep.png": []}
+
+
+def draw_cli_figures(app) -> None:
+    """Run the commands that draw the pages' figures and copy those into docs/."""
+    import contextlib
+    import io
+    import shutil
+    import tempfile
+
+    from contactqp.cli import main
+
+    with tempfile.TemporaryDirectory() as folder:
+        for name, command in CLI_FIGURES.items():
+            with contextlib.redirect_stdout(io.StringIO()):
+                status = main([*command, "--out", folder])
+            if status != 0:
+                raise RuntimeError(f"contactqp {' '.join(command)} exited {status}")
+            shutil.copyfile(Path(folder) / name, Path(app.srcdir) / name)
+
+
+def setup(app) -> None:
+    app.connect("builder-inited", draw_cli_figures)
