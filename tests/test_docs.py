@@ -112,3 +112,19 @@ def test_the_readme_example_prints_what_the_readme_shows():
 def untimed(summary: str) -> str:
     """A summary with the time on its method line left out."""
     return re.sub(r", [0-9.]+ ms$", ", … ms", summary.strip(), flags=re.MULTILINE)
+
+
+def test_the_readme_says_why_nitsche_is_not_verified_on_two_bars():
+    """The README explains the NO its example table shows for Nitsche on two_bars.toml; the
+    closed form (two springs across a gap) gives the reactions 44000 N and 6000 N."""
+    text = README.read_text(encoding="utf-8")
+    claim = re.search(r"\((\d\.\d) µm at the default γ₀ = 100\), which moves the support "
+                      r"reactions by (\d+) N and (\d+) N", text)
+    assert claim, "the README no longer says why nitsche is NO on two_bars.toml"
+    scene = contactqp.load_scene(ROOT / "examples" / "two_bars.toml")
+    flagged = contactqp.solve(scene, method="nitsche")
+    assert not flagged.verified
+    assert f"{flagged.penetration.max() * 1e6:.1f}" == claim.group(1)
+    shift = abs(flagged.reactions - [-44000.0, -6000.0])
+    assert [f"{s:.0f}" for s in shift] == [claim.group(2), claim.group(3)]
+    assert contactqp.solve(scene, method="nitsche", gamma0=1e6).verified
