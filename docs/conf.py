@@ -5,6 +5,7 @@ examples in ``examples/*.py`` are run by sphinx-gallery at build time, so every 
 chart on the tutorial and example pages is the library's own output of that build.
 """
 
+import re
 import sys
 from pathlib import Path
 
@@ -95,5 +96,23 @@ def draw_cli_figures(app) -> None:
             shutil.copyfile(Path(folder) / name, Path(app.srcdir) / name)
 
 
+# The Markdown pages link what a reader of the repository can open (examples/*.py, the
+# examples/ folder, docs/benchmark/*.md); in the built site the same links go to the pages the
+# build makes of those (the gallery, and benchmark_tables/, which show the tables).
+BUILT_PAGES = (
+    (r"\]\((?:\.\./)+examples/(\w+)\.py\)", r"]({up}auto_examples/\1)"),
+    (r"\]\((?:\.\./)+examples/?\)", r"]({up}auto_examples/index)"),
+    (r"\]\((?:\.\./)*benchmark/(\w+)\.md\)", r"]({up}benchmark_tables/\1.md)"),
+)
+
+
+def link_built_pages(app, docname: str, source: list[str]) -> None:
+    """Point a page's links to examples and benchmark tables at their built pages."""
+    up = "../" * docname.count("/")
+    for pattern, target in BUILT_PAGES:
+        source[0] = re.sub(pattern, target.replace("{up}", up), source[0])
+
+
 def setup(app) -> None:
     app.connect("builder-inited", draw_cli_figures)
+    app.connect("source-read", link_built_pages)

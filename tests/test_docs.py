@@ -71,10 +71,12 @@ def test_every_link_of_a_page_exists(page: Path):
     if "_build" in page.parts:
         pytest.skip("build output")
     for target in links(page):
-        # the docs' links to the gallery and the API pages point at what the build generates
-        if target.startswith(("auto_examples/", "../auto_examples/", "../api/")):
-            continue
+        # a reader of the repository opens the link as it is (the docs build points the links
+        # to examples/ and docs/benchmark/ at the pages it makes of them: docs/conf.py)
         assert (page.parent / target).exists(), f"{page.name}: {target}"
+        # benchmark_tables/ holds the build's wrappers, a raw {include} when read as they are
+        if "benchmark_tables" not in page.parts:
+            assert "benchmark_tables/" not in target, f"{page.name}: {target}"
 
 
 @pytest.mark.parametrize("function", FUNCTIONS, ids=lambda f: f.__name__)
