@@ -1,7 +1,14 @@
-"""The four charts of benchmarks/run.py, drawn from its rows (matplotlib, Agg)."""
+"""The four charts of benchmarks/run.py, drawn from its rows (matplotlib, Agg).
+
+    python benchmarks/charts.py DIR     # redraw them (and profiles.png) from DIR/runs.json
+
+redraws a matrix run's charts from the data it wrote, without running it again.
+"""
 
 from __future__ import annotations
 
+import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -11,6 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
+from matplotlib.ticker import LogLocator, NullFormatter
 
 ERROR_FLOOR = 1e-17  # errors of exactly 0 are drawn here
 GROUPS = {  # colour per method or backend
@@ -51,8 +59,11 @@ def speed_accuracy(rows, case_rows, out: Path, wrong: float) -> None:
     sizes = [c for c in case_rows if c["case"] == "default" or c["case"].startswith("taper")]
     columns = min(3, len(sizes))
     lines = -(-len(sizes) // columns)
+    # one time axis and one error axis for every panel: each floor sits at its own time (a
+    # panel scaled to its own runs put the floor at its left frame whatever its time) and a
+    # panel spans decades, labelled at whole decades only
     fig, axes = plt.subplots(lines, columns, figsize=(4.4 * columns, 3.8 * lines + 0.9),
-                             squeeze=False)
+                             squeeze=False, sharex=True, sharey=True)
     for ax in axes.flat[len(sizes):]:
         ax.set_visible(False)
     for ax, case in zip(axes.flat, sizes):
@@ -73,8 +84,13 @@ def speed_accuracy(rows, case_rows, out: Path, wrong: float) -> None:
                            marker=MARKERS[r["formulation"]], s=26, color=colour)
         ax.axvline(case["floor_seconds"], color="k", ls=":", lw=1)
         ax.axhline(wrong, color="k", ls="--", lw=0.7)
-        ax.set(xscale="log", yscale="log", title=f"{case['case']} ({case['elements']} elements)",
-               xlabel="time (s), end to end")
+        ax.set(xscale="log", yscale="log", title=f"{case['case']} ({case['elements']} elements)")
+        ax.xaxis.set_major_locator(LogLocator(numticks=12))
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.yaxis.set_major_locator(LogLocator(numticks=8))
+        ax.yaxis.set_minor_formatter(NullFormatter())
+        ax.tick_params(labelbottom=True)  # sharex keeps only the last row's labels
+        ax.set_xlabel("time (s), end to end")
     for row in axes:
         row[0].set_ylabel("contact-force error (relative)")
     handles = [Line2D([], [], color=c, marker="o", ls="", label=g) for g, c in GROUPS.items()]
@@ -94,7 +110,7 @@ def time_vs_elements(rows, case_rows, out: Path) -> None:
     """Per method or backend, its fastest verified run at each size (marker: formulation)."""
     sizes = sorted((c for c in case_rows if c["case"] == "default" or
                     c["case"].startswith("taper")), key=lambda c: c["elements"])
-    fig, ax = plt.subplots(figsize=(7.5, 5))
+    fig, ax = plt.subplots(figsize=(9.5, 5))
     for name, colour in GROUPS.items():
         points = []
         for case in sizes:
@@ -112,7 +128,8 @@ def time_vs_elements(rows, case_rows, out: Path) -> None:
             label="floor: one factor-and-solve of K")
     handles, _ = ax.get_legend_handles_labels()
     handles += [Line2D([], [], color="k", marker=m, ls="", label=f) for f, m in MARKERS.items()]
-    ax.legend(handles=handles, fontsize=8)
+    # beside the axes: inside, eleven methods and the floor cover the curves they name
+    ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.set(xscale="log", yscale="log", xlabel="elements",
            ylabel="fastest verified run (s), end to end",
            title="Time against size: the tapered bar, one wall")
@@ -189,3 +206,15 @@ def draw_all(rows: list[dict[str, Any]], case_rows: list[dict[str, Any]], out: P
         draw(rows, case_rows, out)
 
 
+def redraw(folder: Path) -> None:
+    """Draw a matrix run's charts again from the runs.json it wrote into ``folder``."""
+    import profiles
+    from matrix import TIMEOUT
+
+    document = json.loads((folder / "runs.json").read_text())
+    draw_all(document["runs"], document["cases"], folder, document["wrong_above"])
+    profiles.write(document["runs"], folder, TIMEOUT)
+
+
+if __name__ == "__main__":
+    redraw(Path(sys.argv[1]))
