@@ -1,12 +1,14 @@
 """The four charts of benchmarks/run.py, drawn from its rows (matplotlib, Agg).
 
-    python benchmarks/charts.py DIR     # redraw them (and profiles.png) from DIR/runs.json
+    python benchmarks/charts.py RUNS [OUT]   # redraw them and profiles.png/.md from RUNS
 
-redraws a matrix run's charts from the data it wrote, without running it again.
+redraws a matrix run's charts from the data it wrote (RUNS: its runs.json, or runs.json.gz as
+docs/benchmark/ keeps it) into OUT (default: RUNS's folder), without running it again.
 """
 
 from __future__ import annotations
 
+import gzip
 import json
 import sys
 from pathlib import Path
@@ -206,15 +208,18 @@ def draw_all(rows: list[dict[str, Any]], case_rows: list[dict[str, Any]], out: P
         draw(rows, case_rows, out)
 
 
-def redraw(folder: Path) -> None:
-    """Draw a matrix run's charts again from the runs.json it wrote into ``folder``."""
+def redraw(runs: Path, out: Path) -> None:
+    """Draw a matrix run's charts again into ``out`` from the runs.json it wrote (or its
+    gzip, runs.json.gz, as docs/benchmark/ keeps it)."""
     import profiles
     from matrix import TIMEOUT
 
-    document = json.loads((folder / "runs.json").read_text())
-    draw_all(document["runs"], document["cases"], folder, document["wrong_above"])
-    profiles.write(document["runs"], folder, TIMEOUT)
+    data = runs.read_bytes()
+    document = json.loads(gzip.decompress(data) if runs.suffix == ".gz" else data)
+    draw_all(document["runs"], document["cases"], out, document["wrong_above"])
+    profiles.write(document["runs"], out, TIMEOUT)
 
 
 if __name__ == "__main__":
-    redraw(Path(sys.argv[1]))
+    runs = Path(sys.argv[1])
+    redraw(runs, Path(sys.argv[2]) if len(sys.argv) > 2 else runs.parent)
