@@ -68,7 +68,12 @@ html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
 }
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["contactqp.css"]
+# Pages with no section below them show no (empty) navigation column, which leaves their code
+# blocks the width of the page.
+html_sidebars = {page: [] for page in ("index", "getting_started", "architecture",
+                                       "auto_examples/course_problem")}
 
 
 # The figures the README and the how-to pages show (docs/load_path.png, docs/nitsche_sweep.png)
