@@ -3,8 +3,13 @@ docstrings the API reference is generated from (the docs build, `sphinx-build -W
 same with numpydoc; this test needs no Sphinx)."""
 
 import dataclasses
+import functools
+import gzip
 import inspect
+import json
+import math
 import re
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -130,3 +135,59 @@ def test_the_readme_says_why_nitsche_is_not_verified_on_two_bars():
     shift = abs(flagged.reactions - [-44000.0, -6000.0])
     assert [f"{s:.0f}" for s in shift] == [claim.group(2), claim.group(3)]
     assert contactqp.solve(scene, method="nitsche", gamma0=1e6).verified
+
+
+# The benchmark's pages quote its matrix run; the run's data is kept beside its tables
+# (docs/benchmark/runs.json.gz, the runs.json that `python benchmarks/run.py` writes, gzipped),
+# and every number the pages quote from it is read here from that data, not from a printout.
+BENCHMARK = ROOT / "docs" / "benchmark"
+BENCHMARKS_PAGE = ROOT / "docs" / "benchmarks.md"
+
+
+@functools.cache
+def matrix_run() -> dict:
+    """The matrix run README.md and docs/benchmarks.md quote."""
+    return json.loads(gzip.decompress((BENCHMARK / "runs.json.gz").read_bytes()))
+
+
+def one_run(case: str, label: str) -> dict:
+    found = [r for r in matrix_run()["runs"] if r["case"] == case and r["label"] == label]
+    assert len(found) == 1, f"no single run {label!r} on {case!r}"
+    return found[0]
+
+
+def error(case: str, label: str) -> float:
+    return one_run(case, label)["force_error"]
+
+
+def percent(value: float) -> str:
+    return f"{100 * value:.1f}"
+
+
+def counted() -> dict[str, int]:
+    """The run's outcomes, and why the skipped ones were skipped."""
+    runs = matrix_run()["runs"]
+    reasons = [r["skip_reason"] for r in runs if r["outcome"] == "skipped"]
+    return {"runs": len(runs), "cases": len(matrix_run()["cases"]),
+            **Counter(r["outcome"] for r in runs),
+            "flagged, right": sum(r["outcome"] == "flagged"
+                                  and r.get("force_error", math.inf) <= 1e-5 for r in runs),
+            **{kind: sum(reason.startswith(start) for reason in reasons) for kind, start in (
+                ("over budget", "over budget"), ("dense solver", "dense solver"),
+                ("timed out", "timed out"), ("dense LCP", "the dense LCP"),
+                ("refused", ("OptionError", "SceneError")))}}
+
+
+def test_the_readme_figure_is_drawn_as_contactqp_curve_draws_it(tmp_path, capsys):
+    """docs/load_path.png, the README's figure, is redrawn by every docs build (docs/conf.py,
+    with docs/nitsche_sweep.png); one whose layout changed since (its size in pixels: the old
+    one-panel chart was 840 × 552) is stale."""
+    from PIL import Image
+
+    from contactqp.cli import main
+
+    assert main(["curve", "--steps", "3", "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    with (Image.open(tmp_path / "load_path.png") as fresh,
+          Image.open(ROOT / "docs" / "load_path.png") as committed):
+        assert committed.size == fresh.size, "docs/load_path.png is stale: build the docs"
