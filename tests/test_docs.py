@@ -191,3 +191,67 @@ def test_the_readme_figure_is_drawn_as_contactqp_curve_draws_it(tmp_path, capsys
     with (Image.open(tmp_path / "load_path.png") as fresh,
           Image.open(ROOT / "docs" / "load_path.png") as committed):
         assert committed.size == fresh.size, "docs/load_path.png is stale: build the docs"
+
+
+def said(page: Path, pattern: str) -> tuple[str, ...]:
+    """What the page says where pattern matches (its groups), line breaks read as spaces."""
+    found = re.search(pattern, " ".join(page.read_text(encoding="utf-8").split()))
+    assert found, f"{page.name} no longer says {pattern!r}"
+    return found.groups()
+
+
+COMPARE = ROOT / "benchmarks" / "qpbenchmark" / "results" / "compare.md"
+COLUMNS = ("problem", "solver", "settings", "qpbenchmark", "check", "error", "residuals")
+
+
+def compared() -> list[dict[str, str]]:
+    """The rows of the qpbenchmark comparison (compare.py's compare.md): every run whose
+    qpbenchmark verdict and contact force disagree."""
+    rows = [[c.strip() for c in line.strip().strip("|").split("|")]
+            for line in COMPARE.read_text(encoding="utf-8").splitlines() if line.startswith("|")]
+    return [dict(zip(COLUMNS, r)) for r in rows
+            if len(r) == len(COLUMNS) and r[0] != "problem" and not r[0].startswith("---")]
+
+
+def test_the_qpbenchmark_numbers_are_those_of_its_comparison():
+    text = COMPARE.read_text(encoding="utf-8")
+    summary = re.findall(r"^\| (success|failure) \| (right|wrong) \| (\d+) \|$", text, re.MULTILINE)
+    page = BENCHMARKS_PAGE.read_text(encoding="utf-8")
+    for verdict, force, runs in summary:
+        assert re.search(rf"^\| (\*\*)?{verdict}(\*\*)? \| (\*\*)?{force}(\*\*)? \| "
+                         rf"(\*\*)?{runs}(\*\*)? \|$", page, re.MULTILINE), (verdict, force, runs)
+    # (the table prints two digits: one success there at 1.0e-05 is just above 1e-5)
+    fooled = [r for r in compared()
+              if r["qpbenchmark"] == "success" and float(r["error"]) >= 1e-5]
+    by_setting = Counter(r["settings"] for r in fooled)
+    assert said(BENCHMARKS_PAGE, r"(\d+) runs pass qpbenchmark's residual tests") == (
+        str(len(fooled)),)
+    assert said(BENCHMARKS_PAGE, r"\((\d+) at its low-accuracy setting, (\d+) at its default, "
+                r"whose tolerances are 1, (\d+) at mid accuracy, none at high\)") == tuple(
+        str(by_setting[s]) for s in ("low_accuracy", "default", "mid_accuracy"))
+    assert by_setting["high_accuracy"] == 0
+    listed = said(BENCHMARKS_PAGE, r"none at high\): ((?:[a-z]+ \d+, )+[a-z]+ \d+) \(")[0]
+    assert dict(pair.split() for pair in listed.split(", ")) == {
+        solver: str(n) for solver, n in Counter(r["solver"] for r in fooled).items()}
+
+    def run(problem: str, solver: str, settings: str) -> dict[str, str]:
+        return next(r for r in compared() if (r["problem"], r["solver"], r["settings"]) == (
+            problem, solver, settings))
+
+    highs, daqp = run("two_bars_SI", "highs", "default"), run("two_bars_SI", "daqp", "low_accuracy")
+    gap, highs_off, residual, daqp_off = said(
+        BENCHMARKS_PAGE, r"HiGHS at default settings has a duality gap of (\S+) and the force "
+        r"(\d+) % off, DAQP at low accuracy a primal residual of (\S+) m and the force (\d+) % off")
+    assert float(gap) == float(highs["residuals"].split(", ")[2])
+    assert float(residual) == float(daqp["residuals"].split(", ")[0])
+    assert (highs_off, daqp_off) == (f"{100 * float(highs['error']):.0f}",
+                                     f"{100 * float(daqp['error']):.0f}")
+    osqp_off, scs_off = said(
+        BENCHMARKS_PAGE, r"OSQP at default settings passes with the force (\S+) of F off, and on "
+        r"the scaled 10⁵-element bar SCS at default settings with the force (\S+) % off")
+    assert float(osqp_off) == float(run("taper_10000_scaled", "osqp", "default")["error"])
+    assert scs_off == percent(float(run("taper_100000_scaled", "scs", "default")["error"]))
+    held = sum(r["problem"].startswith(("held_by_contact", "free_bar")) for r in fooled)
+    assert said(BENCHMARKS_PAGE, r"\((\d+) of them on the bars held by contact, (\d+) on the "
+                r"10⁵-element bar\)") == (
+        str(held), str(sum(r["problem"].startswith("taper_100000_") for r in fooled)))
