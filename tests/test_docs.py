@@ -142,6 +142,7 @@ def test_the_readme_says_why_nitsche_is_not_verified_on_two_bars():
 # and every number the pages quote from it is read here from that data, not from a printout.
 BENCHMARK = ROOT / "docs" / "benchmark"
 BENCHMARKS_PAGE = ROOT / "docs" / "benchmarks.md"
+OUTCOMES = ("verified", "flagged", "claimed success, wrong", "verified, wrong", "skipped")
 
 
 @functools.cache
@@ -168,8 +169,9 @@ def counted() -> dict[str, int]:
     """The run's outcomes, and why the skipped ones were skipped."""
     runs = matrix_run()["runs"]
     reasons = [r["skip_reason"] for r in runs if r["outcome"] == "skipped"]
+    outcomes = Counter(r["outcome"] for r in runs)
     return {"runs": len(runs), "cases": len(matrix_run()["cases"]),
-            **Counter(r["outcome"] for r in runs),
+            **{outcome: outcomes[outcome] for outcome in OUTCOMES},
             "flagged, right": sum(r["outcome"] == "flagged"
                                   and r.get("force_error", math.inf) <= 1e-5 for r in runs),
             **{kind: sum(reason.startswith(start) for reason in reasons) for kind, start in (
@@ -255,3 +257,115 @@ def test_the_qpbenchmark_numbers_are_those_of_its_comparison():
     assert said(BENCHMARKS_PAGE, r"\((\d+) of them on the bars held by contact, (\d+) on the "
                 r"10⁵-element bar\)") == (
         str(held), str(sum(r["problem"].startswith("taper_100000_") for r in fooled)))
+
+
+def sci(value: float, digits: int = 1) -> str:
+    """A number as the pages write it: 7.6e-2 (no zero-padded exponent)."""
+    mantissa, exponent = f"{value:.{digits}e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def ratio_range(case: str, runs) -> tuple[str, str]:
+    ratios = [r["ratio"] for r in runs]
+    assert ratios, f"no runs on {case}"
+    return f"{min(ratios):.1f}", f"{max(ratios):.1f}"
+
+
+def condensed_at_a_million() -> tuple[str, ...]:
+    """The fast path: the condensed formulation's verified runs of lagrange, augmented and
+    the QP at 10⁶ elements, in floors."""
+    runs = [r for r in matrix_run()["runs"] if r["case"] == "taper 1e6"
+            and r["formulation"] == "condensed" and r["outcome"] == "verified"
+            and r["method"] in ("lagrange", "augmented", "qp")]
+    return ratio_range("taper 1e6", runs)
+
+
+def machine() -> tuple[str, ...]:
+    found = matrix_run()["machine"]
+    return found["date"], found["python"], found["numpy"], found["scipy"]
+
+
+def skipped() -> tuple[str, ...]:
+    c = counted()
+    return tuple(str(c[k]) for k in ("claimed success, wrong", "verified, wrong", "skipped",
+                                      "over budget", "dense solver", "timed out", "dense LCP",
+                                      "refused"))
+
+
+def penalty_on_the_default_scene() -> tuple[str, ...]:
+    outcome = {e: one_run("default", f"penalty full ε=1e+{e}")["outcome"] for e in (20, 22)}
+    assert outcome == {20: "flagged", 22: "claimed success, wrong"}
+    return (sci(error("default", "penalty full ε=1e+18")),
+            sci(error("default", "penalty full ε=1e+20")),
+            sci(error("default", "penalty full ε=1e+22")), sci(error("default", "augmented full")))
+
+
+def in_si_units() -> tuple[str, ...]:
+    runs = {name: one_run("default", f"qp {name} full SI default") for name in (
+        "qpsolvers/highs", "qpsolvers/qpalm", "cvxpy/ECOS", "cvxpy/CVXOPT")}
+    assert all(r["outcome"] != "verified" for r in runs.values())
+    return (*(sci(r["force_error"]) for r in runs.values()),
+            sci(error("default", "qp qpsolvers/highs full scaled default")))
+
+
+C = counted
+# (page, what it says with the numbers as groups, the numbers from the run)
+MATRIX_QUOTES = [
+    (README, r"solves (\d+) cases", lambda: (str(C()["cases"]),)),
+    (README, r"in every formulation and setting: (\d+) runs", lambda: (str(C()["runs"]),)),
+    (README, (r"\*\*(\d+) runs were verified and wrong\.\*\* (\d+) runs whose solver claimed "
+     r"success were wrong \(HiGHS (\S+) % off on the default scene in SI units, SCS (\S+) % "
+     r"off on the scaled 10⁵-element bar"), lambda: (
+         str(C()["verified, wrong"]), str(C()["claimed success, wrong"]),
+         percent(error("default", "qp qpsolvers/highs full SI default")),
+         percent(error("taper 1e5", "qp qpsolvers/scs full scaled default")))),
+    (BENCHMARKS_PAGE, (r"of (\d+) runs of every method and every installed QP solver on (\d+) "
+     r"cases, \*\*(\d+) were verified and wrong\*\*; (\d+) runs whose solver claimed success"),
+     lambda: tuple(str(C()[k]) for k in ("runs", "cases", "verified, wrong",
+                                         "claimed success, wrong"))),
+    (BENCHMARKS_PAGE, r"solves (\d+) cases by every method", lambda: (str(C()["cases"]),)),
+    (BENCHMARKS_PAGE, (r"Nitsche: (\d+) runs\. Measured on (\S+) on the development machine "
+     r"\(2 cores, 24 GB, Linux x86-64, Python (\S+), numpy (\S+), scipy (\S+)\)"),
+     lambda: (str(C()["runs"]), *machine())),
+    (BENCHMARKS_PAGE, r"(\d+) runs: (\d+) verified, (\d+) flagged \((\d+) of them within 1e-5",
+     lambda: tuple(str(C()[k]) for k in ("runs", "verified", "flagged", "flagged, right"))),
+    (BENCHMARKS_PAGE, (r"(\d+) claimed success but wrong \(every one flagged by the check\), "
+     r"\*\*(\d+) verified but wrong\*\*, and (\d+) skipped with the reason recorded \((\d+) over "
+     r"the time budget, extrapolated as n\^1\.5 from the previous size; (\d+) dense solvers "
+     r"above 5000 unknowns; (\d+) stopped after 20 s; (\d+) the dense LCP past 2000 rows; "
+     r"(\d+) refused \(Nitsche"), skipped),
+    (BENCHMARKS_PAGE, (r"down to (\S+) at ε = 1e18; at 1e20 round-off in K \+ εCᵀC takes over "
+     r"\((\S+), flagged\) and at 1e22 it is (\S+) off\. .* The augmented method reaches (\S+) "
+     r"on the same scene"), penalty_on_the_default_scene),
+    (BENCHMARKS_PAGE, (r"HiGHS reports success (\S+) off, QPALM (\S+) off .* ECOS and CVXOPT "
+     r"through cvxpy stop (\S+) and (\S+) off; scaled, the same solvers are right \(HiGHS "
+     r"(\S+)\)"), in_si_units),
+    (BENCHMARKS_PAGE, (r"SCS through qpsolvers claims success (\S+) off on the scaled "
+     r"10⁵-element bar"), lambda: (sci(error("taper 1e5", "qp qpsolvers/scs full scaled default")),)),
+    (BENCHMARKS_PAGE, r"the wall pulls the tip out to it with (\S+) % of the load",
+     lambda: (percent(error("open", "lagrange (equality) full")),)),
+    (BENCHMARKS_PAGE, r"interior-point solvers stop with λ ~ (\S+)·F \(Clarabel",
+     lambda: (sci(error("touching", "qp clarabel full scaled default"), 0),)),
+    (BENCHMARKS_PAGE, r"fast path from 10⁴ elements up \((\S+)–(\S+)× the floor at 10⁶",
+     condensed_at_a_million),
+]
+
+
+@pytest.mark.parametrize("quote", range(len(MATRIX_QUOTES)))
+def test_every_number_quoted_from_the_benchmark_is_its_runs(quote: int):
+    page, pattern, numbers = MATRIX_QUOTES[quote]
+    assert said(page, pattern) == numbers()
+
+
+def test_the_best_runs_on_the_benchmark_page_are_its_table():
+    table = (BENCHMARK / "best.md").read_text(encoding="utf-8").strip()
+    assert table in BENCHMARKS_PAGE.read_text(encoding="utf-8")
+
+
+def test_the_benchmark_tables_are_those_of_its_data():
+    """failures.md lists every run of runs.json.gz that is not verified, with its outcome."""
+    rows = [line.split(" | ") for line in
+            (BENCHMARK / "failures.md").read_text(encoding="utf-8").splitlines()[2:]]
+    listed = Counter((r[0].removeprefix("| "), r[1], r[2]) for r in rows)
+    assert listed == Counter((r["case"], r["label"], r["outcome"]) for r in matrix_run()["runs"]
+                             if r["outcome"] != "verified")
