@@ -183,14 +183,16 @@ def stability_map(rows, case_rows, out: Path) -> None:
             ran = [r for r in cell if r["outcome"] != "skipped"]  # raised ones count as run
             good = sum(r["outcome"] == "verified" for r in ran)
             text[i][j] = f"{good}/{len(ran)}" if ran else "–"
-    fig, ax = plt.subplots(figsize=(1.0 * len(cases) + 3.5, 0.32 * len(labels) + 2))
+    # cells as small as their text allows, so that the page, which shows the chart at its
+    # column's width, keeps the text readable (at 1 inch a column it was shrunk to 3 px)
+    fig, ax = plt.subplots(figsize=(0.6 * len(cases) + 4.2, 0.25 * len(labels) + 1.8))
     ax.imshow(grid, cmap=ListedColormap([OUTCOME_COLOURS[s] for s in SEVERITY]), vmin=-0.5,
               vmax=len(SEVERITY) - 0.5, aspect="auto")
     for i in range(len(labels)):
         for j in range(len(cases)):
-            ax.text(j, i, text[i][j], ha="center", va="center", fontsize=6.5)
-    ax.set_xticks(range(len(cases)), cases, rotation=40, ha="right", fontsize=8)
-    ax.set_yticks(range(len(labels)), labels, fontsize=7.5)
+            ax.text(j, i, text[i][j], ha="center", va="center", fontsize=7.5)
+    ax.set_xticks(range(len(cases)), cases, rotation=40, ha="right", fontsize=8.5)
+    ax.set_yticks(range(len(labels)), labels, fontsize=8.5)
     handles = [Line2D([], [], marker="s", ls="", ms=9, color=OUTCOME_COLOURS[s], label=s)
                for s in SEVERITY]
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1), fontsize=8)

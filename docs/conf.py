@@ -70,9 +70,9 @@ html_theme_options = {
 }
 html_static_path = ["_static"]
 html_css_files = ["contactqp.css"]
-# Pages with no section below them show no (empty) navigation column, which leaves their code
-# blocks the width of the page.
-html_sidebars = {page: [] for page in ("index", "getting_started", "architecture",
+# Pages with no section below them show no (empty) navigation column, nor does the benchmarks
+# page (its text links its tables): their code blocks and charts get the width of the page.
+html_sidebars = {page: [] for page in ("index", "getting_started", "architecture", "benchmarks",
                                        "auto_examples/course_problem")}
 
 
