@@ -1,7 +1,16 @@
-"""The four charts of benchmarks/run.py, drawn from its rows (matplotlib, Agg)."""
+"""The four charts of benchmarks/run.py, drawn from its rows (matplotlib, Agg).
+
+    python benchmarks/charts.py RUNS [OUT]   # redraw them and profiles.png/.md from RUNS
+
+redraws a matrix run's charts from the data it wrote (RUNS: its runs.json, or runs.json.gz as
+docs/benchmark/ keeps it) into OUT (default: RUNS's folder), without running it again.
+"""
 
 from __future__ import annotations
 
+import gzip
+import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -11,6 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
+from matplotlib.ticker import LogLocator, NullFormatter
 
 ERROR_FLOOR = 1e-17  # errors of exactly 0 are drawn here
 GROUPS = {  # colour per method or backend
@@ -51,8 +61,11 @@ def speed_accuracy(rows, case_rows, out: Path, wrong: float) -> None:
     sizes = [c for c in case_rows if c["case"] == "default" or c["case"].startswith("taper")]
     columns = min(3, len(sizes))
     lines = -(-len(sizes) // columns)
+    # one time axis and one error axis for every panel: each floor sits at its own time (a
+    # panel scaled to its own runs put the floor at its left frame whatever its time) and a
+    # panel spans decades, labelled at whole decades only
     fig, axes = plt.subplots(lines, columns, figsize=(4.4 * columns, 3.8 * lines + 0.9),
-                             squeeze=False)
+                             squeeze=False, sharex=True, sharey=True)
     for ax in axes.flat[len(sizes):]:
         ax.set_visible(False)
     for ax, case in zip(axes.flat, sizes):
@@ -73,8 +86,13 @@ def speed_accuracy(rows, case_rows, out: Path, wrong: float) -> None:
                            marker=MARKERS[r["formulation"]], s=26, color=colour)
         ax.axvline(case["floor_seconds"], color="k", ls=":", lw=1)
         ax.axhline(wrong, color="k", ls="--", lw=0.7)
-        ax.set(xscale="log", yscale="log", title=f"{case['case']} ({case['elements']} elements)",
-               xlabel="time (s), end to end")
+        ax.set(xscale="log", yscale="log", title=f"{case['case']} ({case['elements']} elements)")
+        ax.xaxis.set_major_locator(LogLocator(numticks=12))
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.yaxis.set_major_locator(LogLocator(numticks=8))
+        ax.yaxis.set_minor_formatter(NullFormatter())
+        ax.tick_params(labelbottom=True)  # sharex keeps only the last row's labels
+        ax.set_xlabel("time (s), end to end")
     for row in axes:
         row[0].set_ylabel("contact-force error (relative)")
     handles = [Line2D([], [], color=c, marker="o", ls="", label=g) for g, c in GROUPS.items()]
@@ -94,7 +112,7 @@ def time_vs_elements(rows, case_rows, out: Path) -> None:
     """Per method or backend, its fastest verified run at each size (marker: formulation)."""
     sizes = sorted((c for c in case_rows if c["case"] == "default" or
                     c["case"].startswith("taper")), key=lambda c: c["elements"])
-    fig, ax = plt.subplots(figsize=(7.5, 5))
+    fig, ax = plt.subplots(figsize=(9.5, 5))
     for name, colour in GROUPS.items():
         points = []
         for case in sizes:
@@ -112,7 +130,8 @@ def time_vs_elements(rows, case_rows, out: Path) -> None:
             label="floor: one factor-and-solve of K")
     handles, _ = ax.get_legend_handles_labels()
     handles += [Line2D([], [], color="k", marker=m, ls="", label=f) for f, m in MARKERS.items()]
-    ax.legend(handles=handles, fontsize=8)
+    # beside the axes: inside, eleven methods and the floor cover the curves they name
+    ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.set(xscale="log", yscale="log", xlabel="elements",
            ylabel="fastest verified run (s), end to end",
            title="Time against size: the tapered bar, one wall")
@@ -164,14 +183,16 @@ def stability_map(rows, case_rows, out: Path) -> None:
             ran = [r for r in cell if r["outcome"] != "skipped"]  # raised ones count as run
             good = sum(r["outcome"] == "verified" for r in ran)
             text[i][j] = f"{good}/{len(ran)}" if ran else "–"
-    fig, ax = plt.subplots(figsize=(1.0 * len(cases) + 3.5, 0.32 * len(labels) + 2))
+    # cells as small as their text allows, so that the page, which shows the chart at its
+    # column's width, keeps the text readable (at 1 inch a column it was shrunk to 3 px)
+    fig, ax = plt.subplots(figsize=(0.6 * len(cases) + 4.2, 0.25 * len(labels) + 1.8))
     ax.imshow(grid, cmap=ListedColormap([OUTCOME_COLOURS[s] for s in SEVERITY]), vmin=-0.5,
               vmax=len(SEVERITY) - 0.5, aspect="auto")
     for i in range(len(labels)):
         for j in range(len(cases)):
-            ax.text(j, i, text[i][j], ha="center", va="center", fontsize=6.5)
-    ax.set_xticks(range(len(cases)), cases, rotation=40, ha="right", fontsize=8)
-    ax.set_yticks(range(len(labels)), labels, fontsize=7.5)
+            ax.text(j, i, text[i][j], ha="center", va="center", fontsize=7.5)
+    ax.set_xticks(range(len(cases)), cases, rotation=40, ha="right", fontsize=8.5)
+    ax.set_yticks(range(len(labels)), labels, fontsize=8.5)
     handles = [Line2D([], [], marker="s", ls="", ms=9, color=OUTCOME_COLOURS[s], label=s)
                for s in SEVERITY]
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1), fontsize=8)
@@ -189,3 +210,18 @@ def draw_all(rows: list[dict[str, Any]], case_rows: list[dict[str, Any]], out: P
         draw(rows, case_rows, out)
 
 
+def redraw(runs: Path, out: Path) -> None:
+    """Draw a matrix run's charts again into ``out`` from the runs.json it wrote (or its
+    gzip, runs.json.gz, as docs/benchmark/ keeps it)."""
+    import profiles
+    from matrix import TIMEOUT
+
+    data = runs.read_bytes()
+    document = json.loads(gzip.decompress(data) if runs.suffix == ".gz" else data)
+    draw_all(document["runs"], document["cases"], out, document["wrong_above"])
+    profiles.write(document["runs"], out, TIMEOUT)
+
+
+if __name__ == "__main__":
+    runs = Path(sys.argv[1])
+    redraw(runs, Path(sys.argv[2]) if len(sys.argv) > 2 else runs.parent)

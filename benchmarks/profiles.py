@@ -110,12 +110,12 @@ def write(rows: list[dict[str, Any]], out: Path, limit: float) -> None:
                           or n in ("qp clarabel (default)", "qp osqp (default)")],
               "QP solvers via qpsolvers, default":
                   [n for n in times if n.startswith("qp qpsolvers/") and n.endswith("(default)")]}
-    figure = Figure(figsize=(12, 8), layout="constrained")
-    panels = figure.subplots(2, 2)
+    # one column per group, its legend below it (inside the panels it covered the curves)
+    figure = Figure(figsize=(12, 9.5), layout="constrained")
     taus = np.logspace(0, 4, 200)
-    for column, (group, names) in enumerate(groups.items()):
-        for row, (values, what) in enumerate(((times, "time"), (errors, "force error"))):
-            ax = panels[row, column]
+    for column, (group, names) in zip(figure.subfigures(1, 2), groups.items()):
+        panels = column.subplots(2, 1)
+        for ax, (values, what) in zip(panels, ((times, "time"), (errors, "force error"))):
             curves = profile({n: values[n] for n in names}, taus)
             for i, (name, share) in enumerate(curves.items()):
                 ax.semilogx(taus, share, label=name, color=f"C{i % 10}",
@@ -123,5 +123,6 @@ def write(rows: list[dict[str, Any]], out: Path, limit: float) -> None:
             ax.set(xlabel=f"τ: within τ × the best {what} of the group",
                    ylabel="share of cases verified", ylim=(0, 1.02),
                    title=f"{group}: profile of {what}")
-        panels[0, column].legend(fontsize=7, loc="lower right")
+        column.legend(*panels[0].get_legend_handles_labels(), loc="outside lower center",
+                      ncol=2, fontsize=7)
     figure.savefig(out / "profiles.png", dpi=110)

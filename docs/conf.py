@@ -5,6 +5,7 @@ examples in ``examples/*.py`` are run by sphinx-gallery at build time, so every 
 chart on the tutorial and example pages is the library's own output of that build.
 """
 
+import re
 import sys
 from pathlib import Path
 
@@ -67,4 +68,56 @@ html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
 }
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["contactqp.css"]
+# Pages with no section below them show no (empty) navigation column, nor does the benchmarks
+# page (its text links its tables): their code blocks and charts get the width of the page.
+html_sidebars = {page: [] for page in ("index", "getting_started", "architecture", "benchmarks",
+                                       "auto_examples/course_problem")}
+
+
+# The figures the README and the how-to pages show (docs/load_path.png, docs/nitsche_sweep.png)
+# are drawn here at every build, by the command line as a user runs it (`contactqp curve`, and
+# `contactqp`, the main job), so that a change to a chart or to the library shows up in them:
+# the README reads the committed files, which the last build rewrote.
+CLI_FIGURES = {"load_path.png": ["curve"], "nitsche_sweep.png": []}
+
+
+def draw_cli_figures(app) -> None:
+    """Run the commands that draw the pages' figures and copy those into docs/."""
+    import contextlib
+    import io
+    import shutil
+    import tempfile
+
+    from contactqp.cli import main
+
+    with tempfile.TemporaryDirectory() as folder:
+        for name, command in CLI_FIGURES.items():
+            with contextlib.redirect_stdout(io.StringIO()):
+                status = main([*command, "--out", folder])
+            if status != 0:
+                raise RuntimeError(f"contactqp {' '.join(command)} exited {status}")
+            shutil.copyfile(Path(folder) / name, Path(app.srcdir) / name)
+
+
+# The Markdown pages link what a reader of the repository can open (examples/*.py, the
+# examples/ folder, docs/benchmark/*.md); in the built site the same links go to the pages the
+# build makes of those (the gallery, and benchmark_tables/, which show the tables).
+BUILT_PAGES = (
+    (r"\]\((?:\.\./)+examples/(\w+)\.py\)", r"]({up}auto_examples/\1)"),
+    (r"\]\((?:\.\./)+examples/?\)", r"]({up}auto_examples/index)"),
+    (r"\]\((?:\.\./)*benchmark/(\w+)\.md\)", r"]({up}benchmark_tables/\1.md)"),
+)
+
+
+def link_built_pages(app, docname: str, source: list[str]) -> None:
+    """Point a page's links to examples and benchmark tables at their built pages."""
+    up = "../" * docname.count("/")
+    for pattern, target in BUILT_PAGES:
+        source[0] = re.sub(pattern, target.replace("{up}", up), source[0])
+
+
+def setup(app) -> None:
+    app.connect("builder-inited", draw_cli_figures)
+    app.connect("source-read", link_built_pages)

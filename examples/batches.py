@@ -12,6 +12,7 @@ to node 2); beyond it λ = (F·f₂ − g)/f₄, linear in F; below it λ = 0.
 """
 
 import numpy as np
+from matplotlib.figure import Figure
 
 import contactqp
 
@@ -28,6 +29,17 @@ error = np.max(np.abs(batch.contact_force[:, 0] - closed_form))
 print(f"largest difference to the closed form over the cases: {error:.2e} N")
 for i in (0, 10, 50, 100):
     print(f"F = {loads[i]:9.0f} N: λ = {batch.contact_force[i, 0]:12.4f} N")
+
+# %%
+# The contact force of every case against the closed form: zero until the tip reaches the
+# wall, then linear in the load (a matplotlib Figure drawn from the batch's arrays):
+figure = Figure(figsize=(6.0, 3.6), layout="constrained")
+axes = figure.subplots()
+axes.plot(loads / 1e3, closed_form / 1e3, "-", color="0.6", lw=3, label="closed form")
+axes.plot(loads / 1e3, batch.contact_force[:, 0] / 1e3, "o", ms=3, label="solve_many")
+axes.set(xlabel="load F (kN)", ylabel="contact force λ (kN)",
+         title="101 load cases, one prepared model")
+axes.legend()
 
 # %%
 # One case alone, with a new load and a new gap, is a checked Result as :func:`contactqp.solve`

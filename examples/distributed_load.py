@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import contactqp
+from contactqp import plot
 
 scene = contactqp.load_scene(Path(sys.argv[0]).parent / "distributed_load.toml")
 result = contactqp.solve(scene)
@@ -20,6 +21,10 @@ print(result.summary())
 
 E, A, L, q, g = 210e9, 1e-3, 1.0, 50e3, 5e-5
 print(f"closed form: {(q * L**2 / (2 * E * A) - g) * E * A / L:.4f} N")
+
+# %%
+# The bar before and after loading, the wall and the force it takes:
+bar_chart = plot.plot_bar(result)
 
 # %%
 # Every method on the same scene, one row each:

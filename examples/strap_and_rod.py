@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import contactqp
+from contactqp import plot
 
 scene = contactqp.load_scene(Path(sys.argv[0]).parent / "strap_and_rod.toml")
 result = contactqp.solve(scene)
@@ -25,3 +26,8 @@ k1 = 70e9 * 250e-6 / 0.4
 force, gap = 60e3, 2e-4
 print(f"k0 = {k0:.5e} N/m, k1 = {k1:.5e} N/m")
 print(f"closed form: {(force - k0 * gap) * k1 / (k0 + k1):.4f} N")
+
+# %%
+# The strap and the rod before and after loading, the gap between them and the contact
+# force:
+bar_chart = plot.plot_bar(result)

@@ -3,8 +3,14 @@ docstrings the API reference is generated from (the docs build, `sphinx-build -W
 same with numpydoc; this test needs no Sphinx)."""
 
 import dataclasses
+import functools
+import gzip
 import inspect
+import json
+import math
 import re
+import statistics
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -71,10 +77,12 @@ def test_every_link_of_a_page_exists(page: Path):
     if "_build" in page.parts:
         pytest.skip("build output")
     for target in links(page):
-        # the docs' links to the gallery and the API pages point at what the build generates
-        if target.startswith(("auto_examples/", "../auto_examples/", "../api/")):
-            continue
+        # a reader of the repository opens the link as it is (the docs build points the links
+        # to examples/ and docs/benchmark/ at the pages it makes of them: docs/conf.py)
         assert (page.parent / target).exists(), f"{page.name}: {target}"
+        # benchmark_tables/ holds the build's wrappers, a raw {include} when read as they are
+        if "benchmark_tables" not in page.parts:
+            assert "benchmark_tables/" not in target, f"{page.name}: {target}"
 
 
 @pytest.mark.parametrize("function", FUNCTIONS, ids=lambda f: f.__name__)
@@ -112,3 +120,251 @@ def test_the_readme_example_prints_what_the_readme_shows():
 def untimed(summary: str) -> str:
     """A summary with the time on its method line left out."""
     return re.sub(r", [0-9.]+ ms$", ", … ms", summary.strip(), flags=re.MULTILINE)
+
+
+def test_the_readme_says_why_nitsche_is_not_verified_on_two_bars():
+    """The README explains the NO its example table shows for Nitsche on two_bars.toml; the
+    closed form (two springs across a gap) gives the reactions 44000 N and 6000 N."""
+    text = README.read_text(encoding="utf-8")
+    claim = re.search(r"\((\d\.\d) µm at the default γ₀ = 100\), which moves the support "
+                      r"reactions by (\d+) N and (\d+) N", text)
+    assert claim, "the README no longer says why nitsche is NO on two_bars.toml"
+    scene = contactqp.load_scene(ROOT / "examples" / "two_bars.toml")
+    flagged = contactqp.solve(scene, method="nitsche")
+    assert not flagged.verified
+    assert f"{flagged.penetration.max() * 1e6:.1f}" == claim.group(1)
+    shift = abs(flagged.reactions - [-44000.0, -6000.0])
+    assert [f"{s:.0f}" for s in shift] == [claim.group(2), claim.group(3)]
+    assert contactqp.solve(scene, method="nitsche", gamma0=1e6).verified
+
+
+# The benchmark's pages quote its matrix run; the run's data is kept beside its tables
+# (docs/benchmark/runs.json.gz, the runs.json that `python benchmarks/run.py` writes, gzipped),
+# and every number the pages quote from it is read here from that data, not from a printout.
+BENCHMARK = ROOT / "docs" / "benchmark"
+BENCHMARKS_PAGE = ROOT / "docs" / "benchmarks.md"
+OUTCOMES = ("verified", "flagged", "claimed success, wrong", "verified, wrong", "skipped")
+
+
+@functools.cache
+def matrix_run() -> dict:
+    """The matrix run README.md and docs/benchmarks.md quote."""
+    return json.loads(gzip.decompress((BENCHMARK / "runs.json.gz").read_bytes()))
+
+
+def one_run(case: str, label: str) -> dict:
+    found = [r for r in matrix_run()["runs"] if r["case"] == case and r["label"] == label]
+    assert len(found) == 1, f"no single run {label!r} on {case!r}"
+    return found[0]
+
+
+def error(case: str, label: str) -> float:
+    return one_run(case, label)["force_error"]
+
+
+def percent(value: float) -> str:
+    return f"{100 * value:.1f}"
+
+
+def counted() -> dict[str, int]:
+    """The run's outcomes, and why the skipped ones were skipped."""
+    runs = matrix_run()["runs"]
+    reasons = [r["skip_reason"] for r in runs if r["outcome"] == "skipped"]
+    outcomes = Counter(r["outcome"] for r in runs)
+    return {"runs": len(runs), "cases": len(matrix_run()["cases"]),
+            **{outcome: outcomes[outcome] for outcome in OUTCOMES},
+            "flagged, right": sum(r["outcome"] == "flagged"
+                                  and r.get("force_error", math.inf) <= 1e-5 for r in runs),
+            **{kind: sum(reason.startswith(start) for reason in reasons) for kind, start in (
+                ("over budget", "over budget"), ("dense solver", "dense solver"),
+                ("timed out", "timed out"), ("dense LCP", "the dense LCP"),
+                ("refused", ("OptionError", "SceneError")))}}
+
+
+def test_the_readme_figure_is_drawn_as_contactqp_curve_draws_it(tmp_path, capsys):
+    """docs/load_path.png, the README's figure, is redrawn by every docs build (docs/conf.py,
+    with docs/nitsche_sweep.png); one whose layout changed since (its size in pixels: the old
+    one-panel chart was 840 × 552) is stale."""
+    from PIL import Image
+
+    from contactqp.cli import main
+
+    assert main(["curve", "--steps", "3", "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    with (Image.open(tmp_path / "load_path.png") as fresh,
+          Image.open(ROOT / "docs" / "load_path.png") as committed):
+        assert committed.size == fresh.size, "docs/load_path.png is stale: build the docs"
+
+
+def said(page: Path, pattern: str) -> tuple[str, ...]:
+    """What the page says where pattern matches (its groups), line breaks read as spaces."""
+    found = re.search(pattern, " ".join(page.read_text(encoding="utf-8").split()))
+    assert found, f"{page.name} no longer says {pattern!r}"
+    return found.groups()
+
+
+COMPARE = ROOT / "benchmarks" / "qpbenchmark" / "results" / "compare.md"
+COLUMNS = ("problem", "solver", "settings", "qpbenchmark", "check", "error", "residuals")
+
+
+def compared() -> list[dict[str, str]]:
+    """The rows of the qpbenchmark comparison (compare.py's compare.md): every run whose
+    qpbenchmark verdict and contact force disagree."""
+    rows = [[c.strip() for c in line.strip().strip("|").split("|")]
+            for line in COMPARE.read_text(encoding="utf-8").splitlines() if line.startswith("|")]
+    return [dict(zip(COLUMNS, r)) for r in rows
+            if len(r) == len(COLUMNS) and r[0] != "problem" and not r[0].startswith("---")]
+
+
+def test_the_qpbenchmark_numbers_are_those_of_its_comparison():
+    text = COMPARE.read_text(encoding="utf-8")
+    summary = re.findall(r"^\| (success|failure) \| (right|wrong) \| (\d+) \|$", text, re.MULTILINE)
+    page = BENCHMARKS_PAGE.read_text(encoding="utf-8")
+    for verdict, force, runs in summary:
+        assert re.search(rf"^\| (\*\*)?{verdict}(\*\*)? \| (\*\*)?{force}(\*\*)? \| "
+                         rf"(\*\*)?{runs}(\*\*)? \|$", page, re.MULTILINE), (verdict, force, runs)
+    # (the table prints two digits: one success there at 1.0e-05 is just above 1e-5)
+    fooled = [r for r in compared()
+              if r["qpbenchmark"] == "success" and float(r["error"]) >= 1e-5]
+    by_setting = Counter(r["settings"] for r in fooled)
+    assert said(BENCHMARKS_PAGE, r"(\d+) runs pass qpbenchmark's residual tests") == (
+        str(len(fooled)),)
+    assert said(BENCHMARKS_PAGE, r"\((\d+) at its low-accuracy setting, (\d+) at its default, "
+                r"whose tolerances are 1, (\d+) at mid accuracy, none at high\)") == tuple(
+        str(by_setting[s]) for s in ("low_accuracy", "default", "mid_accuracy"))
+    assert by_setting["high_accuracy"] == 0
+    listed = said(BENCHMARKS_PAGE, r"none at high\): ((?:[a-z]+ \d+, )+[a-z]+ \d+) \(")[0]
+    assert dict(pair.split() for pair in listed.split(", ")) == {
+        solver: str(n) for solver, n in Counter(r["solver"] for r in fooled).items()}
+
+    def run(problem: str, solver: str, settings: str) -> dict[str, str]:
+        return next(r for r in compared() if (r["problem"], r["solver"], r["settings"]) == (
+            problem, solver, settings))
+
+    highs, daqp = run("two_bars_SI", "highs", "default"), run("two_bars_SI", "daqp", "low_accuracy")
+    gap, highs_off, residual, daqp_off = said(
+        BENCHMARKS_PAGE, r"HiGHS at default settings has a duality gap of (\S+) and the force "
+        r"(\d+) % off, DAQP at low accuracy a primal residual of (\S+) m and the force (\d+) % off")
+    assert float(gap) == float(highs["residuals"].split(", ")[2])
+    assert float(residual) == float(daqp["residuals"].split(", ")[0])
+    assert (highs_off, daqp_off) == (f"{100 * float(highs['error']):.0f}",
+                                     f"{100 * float(daqp['error']):.0f}")
+    osqp_off, scs_off = said(
+        BENCHMARKS_PAGE, r"OSQP at default settings passes with the force (\S+) of F off, and on "
+        r"the scaled 10⁵-element bar SCS at default settings with the force (\S+) % off")
+    assert float(osqp_off) == float(run("taper_10000_scaled", "osqp", "default")["error"])
+    assert scs_off == percent(float(run("taper_100000_scaled", "scs", "default")["error"]))
+    held = sum(r["problem"].startswith(("held_by_contact", "free_bar")) for r in fooled)
+    assert said(BENCHMARKS_PAGE, r"\((\d+) of them on the bars held by contact, (\d+) on the "
+                r"10⁵-element bar\)") == (
+        str(held), str(sum(r["problem"].startswith("taper_100000_") for r in fooled)))
+
+
+def sci(value: float, digits: int = 1) -> str:
+    """A number as the pages write it: 7.6e-2 (no zero-padded exponent)."""
+    mantissa, exponent = f"{value:.{digits}e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def condensed_at_a_million() -> tuple[str, ...]:
+    """The fast path: the condensed formulation's verified runs of lagrange, augmented and
+    the QP at 10⁶ elements, in floors (least, most, median)."""
+    ratios = [r["ratio"] for r in matrix_run()["runs"] if r["case"] == "taper 1e6"
+              and r["formulation"] == "condensed" and r["outcome"] == "verified"
+              and r["method"] in ("lagrange", "augmented", "qp")]
+    assert ratios, "no verified condensed run at 10⁶ elements"
+    return tuple(f"{value:.1f}" for value in (min(ratios), max(ratios), statistics.median(ratios)))
+
+
+def machine() -> tuple[str, ...]:
+    found = matrix_run()["machine"]
+    return found["date"], found["python"], found["numpy"], found["scipy"]
+
+
+def skipped() -> tuple[str, ...]:
+    c = counted()
+    return tuple(str(c[k]) for k in ("claimed success, wrong", "verified, wrong", "skipped",
+                                      "over budget", "dense solver", "timed out", "dense LCP",
+                                      "refused"))
+
+
+def penalty_on_the_default_scene() -> tuple[str, ...]:
+    outcome = {e: one_run("default", f"penalty full ε=1e+{e}")["outcome"] for e in (20, 22)}
+    assert outcome == {20: "flagged", 22: "claimed success, wrong"}
+    return (sci(error("default", "penalty full ε=1e+18")),
+            sci(error("default", "penalty full ε=1e+20")),
+            sci(error("default", "penalty full ε=1e+22")), sci(error("default", "augmented full")))
+
+
+def in_si_units() -> tuple[str, ...]:
+    runs = {name: one_run("default", f"qp {name} full SI default") for name in (
+        "qpsolvers/highs", "qpsolvers/qpalm", "cvxpy/ECOS", "cvxpy/CVXOPT")}
+    assert all(r["outcome"] != "verified" for r in runs.values())
+    assert one_run("default", "qp qpsolvers/quadprog full SI default")["force_error"] == math.inf
+    return (*(sci(r["force_error"]) for r in runs.values()),
+            sci(error("default", "qp qpsolvers/highs full scaled default")))
+
+
+C = counted
+# (page, what it says with the numbers as groups, the numbers from the run)
+MATRIX_QUOTES = [
+    (README, r"solves (\d+) cases", lambda: (str(C()["cases"]),)),
+    (README, r"in every formulation and setting: (\d+) runs", lambda: (str(C()["runs"]),)),
+    (README, (r"\*\*(\d+) runs were verified and wrong\.\*\* (\d+) runs whose solver claimed "
+     r"success were wrong \(HiGHS (\S+) % off on the default scene in SI units, SCS (\S+) % "
+     r"off on the scaled 10⁵-element bar"), lambda: (
+         str(C()["verified, wrong"]), str(C()["claimed success, wrong"]),
+         percent(error("default", "qp qpsolvers/highs full SI default")),
+         percent(error("taper 1e5", "qp qpsolvers/scs full scaled default")))),
+    (BENCHMARKS_PAGE, (r"of (\d+) runs of every method and every installed QP solver on (\d+) "
+     r"cases, \*\*(\d+) were verified and wrong\*\*; (\d+) runs whose solver claimed success"),
+     lambda: tuple(str(C()[k]) for k in ("runs", "cases", "verified, wrong",
+                                         "claimed success, wrong"))),
+    (BENCHMARKS_PAGE, r"solves (\d+) cases by every method", lambda: (str(C()["cases"]),)),
+    (BENCHMARKS_PAGE, (r"Nitsche: (\d+) runs\. Measured on (\S+) on the development machine "
+     r"\(2 cores, 24 GB, Linux x86-64, Python (\S+), numpy (\S+), scipy (\S+)\)"),
+     lambda: (str(C()["runs"]), *machine())),
+    (BENCHMARKS_PAGE, r"(\d+) runs: (\d+) verified, (\d+) flagged \((\d+) of them within 1e-5",
+     lambda: tuple(str(C()[k]) for k in ("runs", "verified", "flagged", "flagged, right"))),
+    (BENCHMARKS_PAGE, (r"(\d+) claimed success but wrong \(every one flagged by the check\), "
+     r"\*\*(\d+) verified but wrong\*\*, and (\d+) skipped with the reason recorded \((\d+) over "
+     r"the time budget, extrapolated as n\^1\.5 from the previous size; (\d+) dense solvers "
+     r"above 5000 unknowns; (\d+) stopped after 20 s; (\d+) the dense LCP past 2000 rows; "
+     r"(\d+) refused \(Nitsche"), skipped),
+    (BENCHMARKS_PAGE, (r"down to (\S+) at ε = 1e18; at 1e20 round-off in K \+ εCᵀC takes over "
+     r"\((\S+), flagged\) and at 1e22 it is (\S+) off\. .* The augmented method reaches (\S+) "
+     r"on the same scene"), penalty_on_the_default_scene),
+    (BENCHMARKS_PAGE, (r"HiGHS reports success (\S+) off, QPALM (\S+) off .*, quadprog finds no answer, ECOS and CVXOPT "
+     r"through cvxpy stop (\S+) and (\S+) off .*; scaled, the same solvers are right \(HiGHS "
+     r"(\S+)\)"), in_si_units),
+    (BENCHMARKS_PAGE, (r"SCS through qpsolvers claims success (\S+) off on the scaled "
+     r"10⁵-element bar \((\S+) in SI units"), lambda: tuple(
+         sci(error("taper 1e5", f"qp qpsolvers/scs full {scaling} default"))
+         for scaling in ("scaled", "SI"))),
+    (BENCHMARKS_PAGE, r"the wall pulls the tip out to it with (\S+) % of the load",
+     lambda: (percent(error("open", "lagrange (equality) full")),)),
+    (BENCHMARKS_PAGE, r"interior-point solvers stop with λ ~ (\S+)·F \(Clarabel",
+     lambda: (sci(error("touching", "qp clarabel full scaled default"), 0),)),
+    (BENCHMARKS_PAGE, (r"QP solvers took (\S+)–(\S+)× the floor in this run, median "
+     r"(\S+)×"), condensed_at_a_million),
+]
+
+
+@pytest.mark.parametrize("quote", range(len(MATRIX_QUOTES)))
+def test_every_number_quoted_from_the_benchmark_is_its_runs(quote: int):
+    page, pattern, numbers = MATRIX_QUOTES[quote]
+    assert said(page, pattern) == numbers()
+
+
+def test_the_best_runs_on_the_benchmark_page_are_its_table():
+    table = (BENCHMARK / "best.md").read_text(encoding="utf-8").strip()
+    assert table in BENCHMARKS_PAGE.read_text(encoding="utf-8")
+
+
+def test_the_benchmark_tables_are_those_of_its_data():
+    """failures.md lists every run of runs.json.gz that is not verified, with its outcome."""
+    rows = [line.split(" | ") for line in
+            (BENCHMARK / "failures.md").read_text(encoding="utf-8").splitlines()[2:]]
+    listed = Counter((r[0].removeprefix("| "), r[1], r[2]) for r in rows)
+    assert listed == Counter((r["case"], r["label"], r["outcome"]) for r in matrix_run()["runs"]
+                             if r["outcome"] != "verified")
