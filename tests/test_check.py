@@ -198,3 +198,18 @@ def test_the_natural_map_residual_is_round_off_for_exact_answers_and_none_for_eq
     assert contactqp.solve().residuals["natural_map"] <= 1e-15
     assert contactqp.solve(hand_scene(), "lemke").residuals["natural_map"] <= 1e-15
     assert contactqp.solve(contact="equality").residuals["natural_map"] is None
+
+
+def test_a_message_names_the_hardest_pulls_and_counts_the_rest():
+    """Equality contact on an obstacle of 100 walls pulls at most of them: the message names
+    the five that pull hardest, hardest first, and counts the others (at 10⁴ walls it once
+    listed every one, 224 kB)."""
+    from contactqp.builders import obstacle
+
+    result = contactqp.solve(obstacle(100), "lagrange", "equality")
+    lam = result.contact_force
+    pulling = np.flatnonzero(lam < 0)
+    assert pulling.size > 5 and not result.physical
+    hardest = pulling[np.argsort(lam[pulling], kind="stable")][:5]
+    listed = ", ".join(f"wall[{i}] {lam[i]:.6g} N" for i in hardest)
+    assert f"a wall pulls the bar ({listed} and {pulling.size - 5} more)" in result.message

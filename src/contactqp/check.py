@@ -203,10 +203,8 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
     physical = pulling <= tolerances.sign
     notes = list(failures)
     if not physical:
-        names = row_names(layout.scene)
-        which = ", ".join(f"{names[i]} {lam[i]:.6g} N"
-                          for i in np.flatnonzero(lam < 0))
-        notes.append(f"non-physical: a wall pulls the bar ({which}); a rigid wall can only push")
+        notes.append(f"non-physical: a wall pulls the bar ({_pulling(layout, lam)}); a rigid "
+                     "wall can only push")
     return Check(residuals, not failures, physical, "; ".join(notes),
                  bounds.force_error_bound, bounds.displacement_error_bound, F, U)
 
@@ -290,3 +288,18 @@ def section_residual(forces: np.ndarray, nodes: np.ndarray, external: np.ndarray
     top = np.maximum.reduceat(forces, starts) + level
     bottom = np.minimum.reduceat(forces, starts) + level
     return max(largest(top), largest(bottom), balance)
+
+
+LISTED_PULLS = 5  # a message names the rows that pull hardest, not every one (10⁴ made 224 kB)
+
+
+def _pulling(layout, lam: np.ndarray) -> str:
+    """The rows whose force pulls, hardest first: at most LISTED_PULLS named, and how many
+    more."""
+    rows = np.flatnonzero(lam < 0)
+    rows = rows[np.argsort(lam[rows], kind="stable")]
+    names = row_names(layout.scene)
+    listed = ", ".join(f"{names[i]} {lam[i]:.6g} N" for i in rows[:LISTED_PULLS])
+    more = rows.size - LISTED_PULLS
+    return listed + (f" and {more} more" if more > 0 else "")
+
