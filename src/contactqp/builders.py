@@ -19,8 +19,10 @@ from contactqp.scene import (
     Scene,
     Support,
     Wall,
+    Walls,
     WallSide,
 )
+from contactqp.scene.walls import checked_gaps
 from contactqp.values import whole_number
 
 # The default scene: a standard course problem.
@@ -315,14 +317,19 @@ def wall_at_every_node(scene: Scene, gap: Any, side: WallSide = "+", bar: int = 
     if gaps.shape != (n,):
         raise SceneError(f"obstacle.gap must be one value or one per node of bar[{b}] ({n}), "
                          f"got {gaps.size}")
-    held = {s.node for s in scene.supports if s.bar == b}
-    existing = {w.node: i for i, w in enumerate(scene.walls) if w.bar == b and w.side == side}
-    walls = list(scene.walls)
-    for node, i in existing.items():
-        walls[i] = replace(walls[i], gap=min(walls[i].gap, float(gaps[node])))
-    walls += [Wall(i, float(gaps[i]), side, b) for i in range(n)
-              if i not in held and i not in existing]
-    return scene.with_walls(tuple(walls))
+    gaps = checked_gaps("obstacle.gap", gaps, n)
+    walls = Walls.of(scene.walls)
+    # where the bar has a wall on that side already, the nearer one is kept (as min(old, new))
+    mine = np.flatnonzero((walls.bars == b) & (walls.sides == side))
+    old, new = walls.gaps[mine], gaps[walls.nodes[mine]]
+    kept = walls.gaps.copy()
+    kept[mine] = np.where(new < old, new, old)
+    free = np.ones(n, dtype=bool)
+    free[[s.node for s in scene.supports if s.bar == b]] = False
+    free[walls.nodes[mine]] = False
+    nodes = np.flatnonzero(free)
+    added = Walls(nodes, gaps[nodes], side, b)
+    return scene.with_walls(Walls.of((walls.with_gaps(kept), added)))
 
 
 __all__ = ["DEFAULT_DIAMETERS", "DEFAULT_ELEMENTS", "DEFAULT_GAP", "DEFAULT_LENGTH",
