@@ -49,7 +49,7 @@ TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_positio
 def _gaps(scene: Scene) -> np.ndarray:
     """g, the gap of every contact row: the walls, then the bar contacts."""
     contacts = np.fromiter((c.gap for c in scene.contacts), float, len(scene.contacts))
-    return np.concatenate((_wall_columns(scene.walls)[2], contacts))
+    return np.concatenate((_wall_columns(scene.walls)[3], contacts))
 
 
 def _wall_columns(walls) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

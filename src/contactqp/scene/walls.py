@@ -17,7 +17,7 @@ import numpy as np
 
 from contactqp.errors import SceneError
 from contactqp.scene.parts import MAX_ELEMENTS, WALL_SIDES, Wall
-from contactqp.values import MAGNITUDE, shown
+from contactqp.values import MAGNITUDE, is_number, shown
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
@@ -25,16 +25,38 @@ def _read_only(array: np.ndarray) -> np.ndarray:
     return array
 
 
+def _refuse(name: str, values: Any, raw: np.ndarray, fits: Any, what: str) -> None:
+    """A SceneError naming the first of ``values`` (as the user gave them) that ``fits``
+    refuses, or the shape of a table given for a list."""
+    if raw.ndim > 1:
+        raise SceneError(f"{name} must be one value or a flat list (one per wall), got an "
+                         f"array of shape {raw.shape}")
+    if raw.ndim == 0:
+        value = values.item() if isinstance(values, np.ndarray) else values
+        if not fits(value):
+            raise SceneError(f"{name} must be {what}, got {shown(value)}")
+        return
+    items = values if isinstance(values, (list, tuple)) else raw.tolist()
+    for i, value in enumerate(items):
+        if not fits(value):
+            raise SceneError(f"{name}[{i}] must be {what}, got {shown(value)}")
+
+
+def _is_whole(value: Any) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
 def _whole_numbers(name: str, values: Any, size: int | None) -> np.ndarray:
     """``values`` (one whole number, or one per wall) as a read-only intp array."""
     raw = np.asarray(values)
-    if raw.dtype.kind not in "iu" or raw.ndim > 1:
-        flat = raw.reshape(-1) if raw.ndim else raw.reshape(1)
-        bad = next((i for i, v in enumerate(flat.tolist())
-                    if isinstance(v, bool) or not isinstance(v, int)), 0)
-        where = f"[{bad}]" if raw.ndim else ""
-        what = shown(flat[bad]) if flat.size and raw.ndim <= 1 else f"shape {raw.shape}"
-        raise SceneError(f"{name}{where} must be a whole number (one, or one per wall), got {what}")
+    if raw.shape == (0,):  # no walls: numpy reads an empty list as floats
+        raw = raw.astype(np.intp)
+    # a boolean in a list of numbers is read by numpy as 0 or 1: refused as Wall refuses it
+    if raw.dtype.kind not in "iu" or raw.ndim > 1 or (
+            isinstance(values, (list, tuple)) and any(isinstance(v, bool) for v in values)):
+        _refuse(name, values, raw, _is_whole, "a whole number")
+    if raw.ndim == 0 and size is None:
+        raise SceneError(f"{name} must be a list of values (one per wall), got {shown(values)}")
     return _read_only(_sized(name, raw.astype(np.intp), size))
 
 
@@ -57,12 +79,9 @@ def _sized(name: str, values: np.ndarray, size: int | None) -> np.ndarray:
 def checked_gaps(name: str, values: Any, size: int) -> np.ndarray:
     """Finite gaps within the range contactqp computes in, as a read-only float array."""
     raw = np.asarray(values)
-    if raw.dtype.kind not in "iuf" or raw.ndim > 1:
-        flat = raw.reshape(-1)
-        bad = next((i for i, v in enumerate(flat.tolist())
-                    if isinstance(v, bool) or not isinstance(v, (int, float))), 0)
-        what = shown(flat[bad]) if flat.size and raw.ndim <= 1 else f"shape {raw.shape}"
-        raise SceneError(f"{name}[{bad}] must be a number (one, or one per wall), got {what}")
+    if raw.dtype.kind not in "iuf" or raw.ndim > 1 or (
+            isinstance(values, (list, tuple)) and any(isinstance(v, bool) for v in values)):
+        _refuse(name, values, raw, is_number, "a number")
     gaps = _sized(name, raw.astype(float), size)
     bad = np.flatnonzero(~np.isfinite(gaps) | (np.abs(gaps) > MAGNITUDE))
     if bad.size:
@@ -76,13 +95,11 @@ def checked_gaps(name: str, values: Any, size: int) -> np.ndarray:
 
 def _sides(name: str, values: Any, size: int) -> np.ndarray:
     """Each wall's side, '+' or '-', as a read-only array of one-character text."""
-    raw = np.asarray(values, dtype=object)
-    sides = _sized(name, raw, size)
-    for i, side in enumerate(sides.tolist()) if sides.size else ():
-        if not isinstance(side, str) or side not in WALL_SIDES:
-            where = f"[{i}]" if raw.ndim else ""
-            raise SceneError(f"{name}{where} must be '+' or '-', got {side!r}")
-    return _read_only(sides.astype("<U1"))
+    raw = np.asarray(values)
+    if raw.dtype.kind != "U" or raw.ndim > 1 or not np.isin(raw, WALL_SIDES).all():
+        _refuse(name, values, np.asarray(values, dtype=object), lambda side: isinstance(
+            side, str) and side in WALL_SIDES, "'+' or '-'")
+    return _read_only(_sized(name, raw.astype("<U1"), size))
 
 
 @dataclass(frozen=True, eq=False)
@@ -257,4 +274,4 @@ def _check_repeats(walls: Walls, keys: np.ndarray) -> None:
         i = int(order[repeated + 1].min())
         first = int(order[np.searchsorted(keys[order], keys[i])])  # stable: the earliest
         raise SceneError(f"wall[{i}] repeats wall[{first}] (node {walls.nodes[i]}, side "
-                         f"{walls.sides[i]!r}): keep the one with the smaller gap")
+                         f"{str(walls.sides[i])!r}): keep the one with the smaller gap")
