@@ -184,10 +184,10 @@ def scene_with(walls) -> Scene:
 
 
 @pytest.mark.parametrize(("make", "message"), [
-    (lambda: Walls([1, 2], [1e-4, 2e-4, 3e-4]), "walls.gaps has 3 values: give one, or one per "
-                                                "wall (2)"),
-    (lambda: Walls([[1, 2]], 1e-4), "walls.nodes must be one value or a flat list (one per "
-                                    "wall), got an array of shape (1, 2)"),
+    (lambda: Walls([1, 2], [1e-4, 2e-4, 3e-4]), ("walls.gaps has 3 values: give one, or one per "
+                                                "wall (2)")),
+    (lambda: Walls([[1, 2]], 1e-4), ("walls.nodes must be one value or a flat list (one per "
+                                    "wall), got an array of shape (1, 2)")),
     (lambda: Walls([1, 2.5], 1e-4), "walls.nodes[1] must be a whole number"),
     (lambda: Walls([1, True], 1e-4), "walls.nodes[1] must be a whole number"),
     (lambda: Walls(3, 1e-4), "walls.nodes must be a list of values (one per wall), got 3"),
@@ -203,10 +203,10 @@ def scene_with(walls) -> Scene:
     (lambda: scene_with(Walls([1, 2], 0.0, "+", [0, 1])),
      "wall[1].bar = 1: the scene has bars 0 to 0"),
     (lambda: scene_with(Walls([1, 2], 0.0, "+", -1)), "wall[0].bar must be a whole bar number"),
-    (lambda: scene_with(Walls([1, 0], 0.0)), "wall[1].node = 0 is support[0]: a wall there "
-                                             "carries no force"),
-    (lambda: scene_with(Walls([1, 3, 3], 0.0)), "wall[2] repeats wall[1] (node 3, side '+'): "
-                                                "keep the one with the smaller gap"),
+    (lambda: scene_with(Walls([1, 0], 0.0)), ("wall[1].node = 0 is support[0]: a wall there "
+                                             "carries no force")),
+    (lambda: scene_with(Walls([1, 3, 3], 0.0)), ("wall[2] repeats wall[1] (node 3, side '+'): "
+                                                "keep the one with the smaller gap")),
     (lambda: scene_with([Wall(1, 0.0), Walls([2], 0.0), Wall(3, np.nan)]),
      "wall[2].gap must be finite, got nan"),
     (lambda: scene_with([Walls([1], 0.0), "wall"]), "wall[1] must be a contactqp.Wall or Walls"),

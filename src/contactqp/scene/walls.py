@@ -149,6 +149,8 @@ class Walls:
         """One set of ``walls`` in order: :class:`Walls` and Wall objects (whose fields are
         checked already, contactqp.scene.validation.check_wall_fields), each run of Wall
         objects read column by column."""
+        if isinstance(walls, Walls):  # not iterated: that would make its Wall objects
+            return walls
         parts: list[Walls] = []
         run: list[Wall] = []
         for wall in walls:
