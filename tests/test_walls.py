@@ -9,13 +9,24 @@ form is rebuilt here wall by wall, as they were written before they made arrays.
 
 from __future__ import annotations
 
+import pickle
+import re
 import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import contactqp
-from contactqp.builders import _tapered, channel, flat_patch, obstacle, wall_at_every_node
+from contactqp.builders import (
+    _tapered,
+    channel,
+    convert_units,
+    flat_patch,
+    minimal,
+    obstacle,
+    wall_at_every_node,
+)
 from contactqp.errors import SceneError
 from contactqp.random_scenes import random_scene
 from contactqp.scene import Bar, BarContact, Load, Scene, Support, Wall, Walls, row_names
@@ -271,3 +282,21 @@ def test_scene_file_walls_tables_and_their_errors():
     data["walls"][0]["node"] = 1
     with pytest.raises(SceneError, match=r"walls\[0\]\.node: unknown key"):
         scene_from_dict(data)
+
+
+def test_the_scene_file_reference_walls_block_reads_as_its_comment_says():
+    text = (Path(__file__).parent.parent / "docs" / "scene_files.md").read_text(encoding="utf-8")
+    block = next(b for b in re.findall(r"```toml\n(.*?)```", text, re.DOTALL) if "[[walls]]" in b)
+    data = tomllib.loads(block)["walls"][0]
+    walls = Walls(data["nodes"], data["gaps"], data["sides"])
+    assert walls == (Wall(1, 1e-3, "-"), Wall(2, 2e-3, "-"), Wall(3, 3e-3, "+"))
+
+
+def test_minimal_convert_units_and_pickle_keep_a_wall_set():
+    scene = obstacle(12)
+    objects = as_objects(scene)
+    for make in (minimal, lambda s: convert_units(s, "mm-N-MPa"),
+                 lambda s: pickle.loads(pickle.dumps(s))):
+        new, old = make(scene), make(objects)
+        assert isinstance(new.walls, Walls) and new.walls == old.walls
+        assert_same_result(old, new)

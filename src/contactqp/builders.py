@@ -226,7 +226,7 @@ def minimal(scene: Scene) -> Scene:
         tuple(bars),
         tuple(replace(s, node=int(numbers[s.bar][s.node])) for s in scene.supports),
         tuple(replace(p, node=int(numbers[p.bar][p.node])) for p in scene.loads),
-        tuple(replace(w, node=int(numbers[w.bar][w.node])) for w in scene.walls),
+        _renumbered(scene.walls, numbers),
         name=f"{scene.name} (minimal mesh)",
         distributed=tuple(replace(q, start=element(q.bar, q.start), stop=element(q.bar, q.stop))
                           for q in scene.distributed),
@@ -235,6 +235,15 @@ def minimal(scene: Scene) -> Scene:
         units=scene.units,
     )
 
+
+def _renumbered(walls: tuple[Wall, ...] | Walls, numbers: list[np.ndarray]) -> Any:
+    """The walls at their nodes' new numbers (``numbers``: per bar, each old node's new one),
+    a :class:`Walls` kept one."""
+    if not isinstance(walls, Walls):
+        return tuple(replace(w, node=int(numbers[w.bar][w.node])) for w in walls)
+    starts = np.concatenate(([0], np.cumsum([n.size for n in numbers])))
+    nodes = np.concatenate(numbers)[starts[walls.bars] + walls.nodes]
+    return Walls(nodes, walls.gaps, walls.sides, walls.bars)
 
 
 def convert_units(scene: Scene, units: str) -> Scene:
@@ -272,7 +281,9 @@ def convert_units(scene: Scene, units: str) -> Scene:
     bars = tuple(bar(b) for b in scene.bars)
     return replace(
         scene, bars=bars, units=units,
-        walls=tuple(replace(w, gap=w.gap * length) for w in scene.walls),
+        walls=(scene.walls.with_gaps(scene.walls.gaps * length)
+               if isinstance(scene.walls, Walls)
+               else tuple(replace(w, gap=w.gap * length) for w in scene.walls)),
         contacts=tuple(replace(c, gap=c.gap * length) for c in scene.contacts),
         distributed=tuple(replace(q, intensity=q.intensity / length) for q in scene.distributed),
     )
