@@ -300,3 +300,29 @@ def test_minimal_convert_units_and_pickle_keep_a_wall_set():
         new, old = make(scene), make(objects)
         assert isinstance(new.walls, Walls) and new.walls == old.walls
         assert_same_result(old, new)
+
+
+def test_with_values_refuses_crossing_gaps_as_the_wall_objects_do():
+    walls = Walls([2, 2], [1e-4, 1e-4], ["+", "-"])
+    arrays = scene_with(walls)
+    objects = as_objects(arrays)
+    gaps = [1e-5, -2e-5]  # the − wall now past the + wall: node 2 has no position
+    with pytest.raises(SceneError) as expected:
+        objects.with_values(gaps=gaps)
+    with pytest.raises(SceneError) as got:
+        arrays.with_values(gaps=gaps)
+    assert str(got.value) == str(expected.value) and "no position" in str(got.value)
+
+
+def test_scene_file_round_trip_of_walls_on_several_bars_and_sides():
+    bars = (Bar.uniform(1e-4, 2e11, length=1.0, elements=4),
+            Bar.uniform(2e-4, 2e11, length=1.0, elements=3))
+    walls = Walls([4, 2, 3, 1], [1e-4, -1e-6, 0.1 + 0.2, 2e-5], ["+", "-", "+", "-"],
+                  [0, 0, 1, 1])
+    scene = Scene(bars, (Support(0, 0), Support(0, 1)), (Load(2, 5e5), Load(2, -1e5, 1)), walls)
+    text = scene_to_toml(scene)
+    assert 'sides = ["+", "-", "+", "-"]' in text and "bars = [0, 0, 1, 1]" in text
+    back = scene_from_dict(tomllib.loads(text))
+    assert_equal_arrays((back.walls.nodes, back.walls.gaps, back.walls.sides, back.walls.bars),
+                        (walls.nodes, walls.gaps, walls.sides, walls.bars))
+    assert_same_result(as_objects(scene), back)
