@@ -326,3 +326,17 @@ def test_scene_file_round_trip_of_walls_on_several_bars_and_sides():
     assert_equal_arrays((back.walls.nodes, back.walls.gaps, back.walls.sides, back.walls.bars),
                         (walls.nodes, walls.gaps, walls.sides, walls.bars))
     assert_same_result(as_objects(scene), back)
+
+
+def test_many_wall_objects_with_no_room_are_named_by_the_constraint_graph():
+    from contactqp.feasibility import impossible_constraints
+
+    bar = Bar.uniform(1e-4, 2e11, length=1.0, elements=30)
+    walls = [Wall(i, 1e-4) for i in range(1, 31)] + [Wall(17, -2e-4, "-")]  # 17 walls or more
+    with pytest.raises(SceneError) as error:
+        Scene(bar, (Support(0),), (), walls)
+    unchecked = object.__new__(Scene)  # the same scene, its constraints not yet checked
+    unchecked.__dict__.update(bars=(bar,), supports=(Support(0),), loads=(), walls=tuple(walls),
+                              contacts=(), distributed=(), units="SI", name="scene")
+    assert str(error.value) == impossible_constraints(unchecked)
+    assert "wall[16]" in str(error.value) and "wall[30]" in str(error.value)
