@@ -340,3 +340,26 @@ def test_many_wall_objects_with_no_room_are_named_by_the_constraint_graph():
                               contacts=(), distributed=(), units="SI", name="scene")
     assert str(error.value) == impossible_constraints(unchecked)
     assert "wall[16]" in str(error.value) and "wall[30]" in str(error.value)
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (lambda w: Wall(w.node, float("nan"), w.side), "wall[20].gap must be finite, got nan"),
+    (lambda w: Wall(w.node, 2e30, w.side), "wall[20].gap = 2e+30 is outside the range"),
+    (lambda w: Wall(40, w.gap, w.side), "wall[20].node = 40: the bar has nodes 0 to 30"),
+    (lambda w: Wall(0, w.gap, w.side), "wall[20].node = 0 is support[0]"),
+    (lambda w: Wall(3, w.gap, w.side), "wall[20] repeats wall[2] (node 3, side '+')"),
+    (lambda w: Wall(w.node, 1, w.side), None),  # an int gap: taken as the loop takes it
+])
+def test_many_wall_objects_say_what_the_loop_says(change, message):
+    """More than 16 Wall objects are checked in numpy passes; any fault is named by the loop
+    over the objects, the first in row order."""
+    bar = Bar.uniform(1e-4, 2e11, length=1.0, elements=30)
+    walls = [Wall(i, 1e-4) for i in range(1, 31)]
+    walls[20] = change(walls[20])
+    walls[25] = Wall(walls[25].node, float("inf"))  # a later fault: not the one named
+    if message is None:
+        walls[25] = Wall(26, 1e-4)
+        assert Scene(bar, (Support(0),), (), walls).walls[20].gap == 1
+        return
+    with pytest.raises(SceneError, match=re.escape(message)):
+        Scene(bar, (Support(0),), (), walls)

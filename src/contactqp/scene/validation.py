@@ -12,7 +12,7 @@ import numpy as np
 from contactqp.errors import SceneError
 from contactqp.scene.parts import WALL_SIDES, Bar, Wall
 from contactqp.scene.walls import Walls, check_wall_set
-from contactqp.values import number, whole_number
+from contactqp.values import MAGNITUDE, number, whole_number
 
 if TYPE_CHECKING:
     from contactqp.scene.scene import Scene
@@ -94,7 +94,10 @@ def _check_walls(scene: Scene, node, held: dict[int, int]) -> dict[tuple[int, st
     """Walls on free nodes, one per side of a node: {(node, side): wall index} (for a
     :class:`Walls`, checked in numpy passes, and made only for a scene with bar contacts)."""
     if isinstance(scene.walls, Walls):
-        return _check_wall_set(scene, held)
+        return _check_wall_set(scene, scene.walls, held)
+    checked = _plain_walls(scene, held)
+    if checked is not None:
+        return checked
     seen: dict[tuple[int, str], int] = {}
     for i, wall in enumerate(scene.walls):
         at = node(f"wall[{i}]", wall.bar, wall.node)
@@ -111,10 +114,28 @@ def _check_walls(scene: Scene, node, held: dict[int, int]) -> dict[tuple[int, st
     return seen
 
 
-def _check_wall_set(scene: Scene, held: dict[int, int]) -> dict[tuple[int, str], int]:
-    """:func:`check_wall_set` of the scene's :class:`Walls`; {(node, side): wall index} only
-    where bar contacts need it."""
+def _plain_walls(scene: Scene, held: dict[int, int]) -> dict[tuple[int, str], int] | None:
+    """Many Wall objects whose fields have plain types (int node and bar, float gap, side '+'
+    or '-') checked as one :class:`Walls` in numpy passes (a fifth of the time of the loop);
+    None where any check fails, or for a few walls: the loop then names the first fault as it
+    always has."""
     walls = scene.walls
+    if len(walls) <= 16 or not all(type(w.node) is int and type(w.bar) is int and
+                                   type(w.gap) is float and w.side in WALL_SIDES for w in walls):
+        return None
+    columns = Walls.of(walls)
+    if not (np.abs(columns.gaps) <= MAGNITUDE).all():  # also False for NaN
+        return None
+    try:
+        return _check_wall_set(scene, columns, held)
+    except SceneError:
+        return None
+
+
+def _check_wall_set(scene: Scene, walls: Walls,
+                    held: dict[int, int]) -> dict[tuple[int, str], int]:
+    """:func:`check_wall_set` of the scene's walls as a :class:`Walls`; {(node, side): wall
+    index} only where bar contacts need it."""
     counts = np.array([b.n_nodes for b in scene.bars], dtype=np.intp)
     offsets = np.concatenate(([0], np.cumsum(counts)[:-1]))
     check_wall_set(walls, counts, offsets, held)
