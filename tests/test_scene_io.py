@@ -223,7 +223,7 @@ BAD_DATA = [
      "bar[1].material.yield_stress", "0.0"),
     (two_bars_data, ("bar", 1, "section", "shape"), "tube", "bar[1].section.shape", "'tube'"),
     # unknown keys: the message names the key (the "value" is the key itself)
-    (valid_data, ("walls",), [], "scene.walls", "unknown key"),
+    (valid_data, ("wals",), [], "scene.wals", "unknown key"),
     (valid_data, ("material", "youngs_moduls"), 2e11, "material.youngs_moduls", "unknown key"),
     (valid_data, ("bar", "areas_mm2"), [1e-4], "bar.areas_mm2", "unknown key"),
     (section_data, ("bar", "section", "radius"), 0.01, "bar.section.radius", "unknown key"),

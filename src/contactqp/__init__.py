@@ -45,6 +45,7 @@ from contactqp.scene import (
     Support,
     Units,
     Wall,
+    Walls,
 )
 from contactqp.scene_io import load_scene, scene_from_dict, scene_to_toml
 from contactqp.solve import solve
@@ -56,7 +57,8 @@ __all__ = [
     "CONTACT_KINDS", "FORMULATIONS", "GUARANTEE", "METHODS", "TOLERANCES", "UNIT_SYSTEMS", "Bar",
     "BarContact", "Batch", "ContactqpError", "DistributedLoad", "Layout", "Load", "LoadPath",
     "Model", "OptionError", "Prepared", "QPProblem", "Result", "Run", "Scene", "SceneError",
-    "SolverError", "SolverNotAvailable", "Support", "Tolerances", "Units", "Wall", "__version__",
+    "SolverError", "SolverNotAvailable", "Support", "Tolerances", "Units", "Wall", "Walls",
+    "__version__",
     "available_qp_solvers", "build_model", "channel", "check", "compare", "convert_units",
     "default_scene", "detail_table", "first_contact_factor", "flat_patch", "load_path",
     "load_scene", "minimal", "obstacle", "penalty_sweep", "prepare", "qp_problem",

@@ -19,8 +19,10 @@ from contactqp.scene import (
     Scene,
     Support,
     Wall,
+    Walls,
     WallSide,
 )
+from contactqp.scene.walls import checked_gaps
 from contactqp.values import whole_number
 
 # The default scene: a standard course problem.
@@ -224,7 +226,7 @@ def minimal(scene: Scene) -> Scene:
         tuple(bars),
         tuple(replace(s, node=int(numbers[s.bar][s.node])) for s in scene.supports),
         tuple(replace(p, node=int(numbers[p.bar][p.node])) for p in scene.loads),
-        tuple(replace(w, node=int(numbers[w.bar][w.node])) for w in scene.walls),
+        _renumbered(scene.walls, numbers),
         name=f"{scene.name} (minimal mesh)",
         distributed=tuple(replace(q, start=element(q.bar, q.start), stop=element(q.bar, q.stop))
                           for q in scene.distributed),
@@ -233,6 +235,15 @@ def minimal(scene: Scene) -> Scene:
         units=scene.units,
     )
 
+
+def _renumbered(walls: tuple[Wall, ...] | Walls, numbers: list[np.ndarray]) -> Any:
+    """The walls at their nodes' new numbers (``numbers``: per bar, each old node's new one),
+    a :class:`Walls` kept one."""
+    if not isinstance(walls, Walls):
+        return tuple(replace(w, node=int(numbers[w.bar][w.node])) for w in walls)
+    starts = np.concatenate(([0], np.cumsum([n.size for n in numbers])))
+    nodes = np.concatenate(numbers)[starts[walls.bars] + walls.nodes]
+    return Walls(nodes, walls.gaps, walls.sides, walls.bars)
 
 
 def convert_units(scene: Scene, units: str) -> Scene:
@@ -270,7 +281,9 @@ def convert_units(scene: Scene, units: str) -> Scene:
     bars = tuple(bar(b) for b in scene.bars)
     return replace(
         scene, bars=bars, units=units,
-        walls=tuple(replace(w, gap=w.gap * length) for w in scene.walls),
+        walls=(scene.walls.with_gaps(scene.walls.gaps * length)
+               if isinstance(scene.walls, Walls)
+               else tuple(replace(w, gap=w.gap * length) for w in scene.walls)),
         contacts=tuple(replace(c, gap=c.gap * length) for c in scene.contacts),
         distributed=tuple(replace(q, intensity=q.intensity / length) for q in scene.distributed),
     )
@@ -315,14 +328,19 @@ def wall_at_every_node(scene: Scene, gap: Any, side: WallSide = "+", bar: int = 
     if gaps.shape != (n,):
         raise SceneError(f"obstacle.gap must be one value or one per node of bar[{b}] ({n}), "
                          f"got {gaps.size}")
-    held = {s.node for s in scene.supports if s.bar == b}
-    existing = {w.node: i for i, w in enumerate(scene.walls) if w.bar == b and w.side == side}
-    walls = list(scene.walls)
-    for node, i in existing.items():
-        walls[i] = replace(walls[i], gap=min(walls[i].gap, float(gaps[node])))
-    walls += [Wall(i, float(gaps[i]), side, b) for i in range(n)
-              if i not in held and i not in existing]
-    return scene.with_walls(tuple(walls))
+    gaps = checked_gaps("obstacle.gap", gaps, n)
+    walls = Walls.of(scene.walls)
+    # where the bar has a wall on that side already, the nearer one is kept (as min(old, new))
+    mine = np.flatnonzero((walls.bars == b) & (walls.sides == side))
+    old, new = walls.gaps[mine], gaps[walls.nodes[mine]]
+    kept = walls.gaps.copy()
+    kept[mine] = np.where(new < old, new, old)
+    free = np.ones(n, dtype=bool)
+    free[[s.node for s in scene.supports if s.bar == b]] = False
+    free[walls.nodes[mine]] = False
+    nodes = np.flatnonzero(free)
+    added = Walls(nodes, gaps[nodes], side, b)
+    return scene.with_walls(Walls.of((walls.with_gaps(kept), added)))
 
 
 __all__ = ["DEFAULT_DIAMETERS", "DEFAULT_ELEMENTS", "DEFAULT_GAP", "DEFAULT_LENGTH",

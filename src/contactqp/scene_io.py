@@ -23,12 +23,13 @@ from contactqp.scene import (
     Section,
     Support,
     Wall,
+    Walls,
 )
 from contactqp.values import number
 
-_TOP_KEYS = {"name", "units", "material", "bar", "support", "load", "wall", "distributed_load",
-             "contact",
-             "obstacle"}
+_TOP_KEYS = {"name", "units", "material", "bar", "support", "load", "wall", "walls",
+             "distributed_load", "contact", "obstacle"}
+_WALLS_KEYS = {"nodes", "gaps", "sides", "bars"}
 _MATERIAL_KEYS = {"youngs_modulus", "yield_stress"}
 _BAR_KEYS = {"length", "lengths", "elements", "section", "areas", "area", "material"}
 _AREA_KEYS = ("areas", "area", "section")  # exactly one says what each element's area is
@@ -181,6 +182,10 @@ def scene_from_dict(data: dict, name: str = "scene") -> Scene:
         Wall(s["node"], s["gap"], s.get("side", "+"), s.get("bar", 0))
         for s in _array_of_tables(data, "wall", {"node", "gap", "side", "bar"}, {"node", "gap"})
     )
+    sets = [Walls(w["nodes"], w["gaps"], w.get("sides", "+"), w.get("bars", 0), name=f"walls[{i}]")
+            for i, w in enumerate(_array_of_tables(data, "walls", _WALLS_KEYS, {"nodes", "gaps"}))]
+    if sets:  # the [[wall]] tables' rows first, then each [[walls]] in order
+        walls = [*walls, *sets]
     distributed = tuple(
         DistributedLoad(q["intensity"], q.get("bar", 0), q.get("start", 0), q.get("stop"))
         for q in _array_of_tables(data, "distributed_load", {"intensity", "bar", "start", "stop"},
@@ -264,6 +269,18 @@ def toml_string(value: str) -> str:
     return '"' + "".join(map(escaped, value)) + '"'
 
 
+def _wall_set_lines(walls: Walls) -> list[str]:
+    """A :class:`Walls` as one ``[[walls]]`` table: its arrays as TOML arrays (gaps bit for
+    bit, as repr gives them), ``sides`` and ``bars`` as one value where every wall shares it."""
+    sides, bars = walls.sides.tolist(), walls.bars.tolist()
+    side = f'"{sides[0]}"' if len(set(sides)) == 1 else (
+        "[" + ", ".join(f'"{x}"' for x in sides) + "]")
+    bar = str(bars[0]) if len(set(bars)) == 1 else repr(bars)
+    lines = ["", "[[walls]]", f"nodes = {walls.nodes.tolist()!r}",
+             f"gaps = {walls.gaps.tolist()!r}"]
+    return lines + ([f"sides = {side}", f"bars = {bar}"] if len(walls) else [])
+
+
 def scene_to_toml(scene: Scene) -> str:
     """The scene as TOML text that :func:`load_scene` reads back to the same scene: each
     bar's areas and lengths (a section as the areas it gave, one ``area`` for a uniform
@@ -296,9 +313,12 @@ def scene_to_toml(scene: Scene) -> str:
     for q in scene.distributed:
         lines += ["", "[[distributed_load]]", f"bar = {q.bar}", f"intensity = {float(q.intensity)!r}",
                   f"start = {q.start}"] + ([] if q.stop is None else [f"stop = {q.stop}"])
-    for w in scene.walls:
-        lines += ["", "[[wall]]", f"bar = {w.bar}", f"node = {w.node}", f"gap = {float(w.gap)!r}",
-                  f'side = "{w.side}"']
+    if isinstance(scene.walls, Walls):
+        lines += _wall_set_lines(scene.walls)
+    else:
+        for w in scene.walls:
+            lines += ["", "[[wall]]", f"bar = {w.bar}", f"node = {w.node}",
+                      f"gap = {float(w.gap)!r}", f'side = "{w.side}"']
     for c in scene.contacts:
         lines += ["", "[[contact]]", f"bar_a = {c.bar_a}", f"node_a = {c.node_a}",
                   f"bar_b = {c.bar_b}", f"node_b = {c.node_b}", f"gap = {float(c.gap)!r}"]

@@ -48,8 +48,20 @@ TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_positio
 
 def _gaps(scene: Scene) -> np.ndarray:
     """g, the gap of every contact row: the walls, then the bar contacts."""
-    items = scene.walls + scene.contacts
-    return np.fromiter((item.gap for item in items), float, len(items))
+    contacts = np.fromiter((c.gap for c in scene.contacts), float, len(scene.contacts))
+    return np.concatenate((_wall_columns(scene.walls)[3], contacts))
+
+
+def _wall_columns(walls) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(bar, node, sign, gap) of every wall: the arrays of a
+    :class:`~contactqp.scene.Walls`, else read from the Wall objects one by one."""
+    if not isinstance(walls, tuple):  # a Walls: its arrays, no object per wall
+        return walls.bars, walls.nodes, walls.signs, walls.gaps
+    n = len(walls)
+    plus = np.fromiter((w.side == "+" for w in walls), dtype=bool, count=n)
+    return (np.fromiter((w.bar for w in walls), np.intp, n),
+            np.fromiter((w.node for w in walls), np.intp, n),
+            np.where(plus, 1.0, -1.0), np.fromiter((w.gap for w in walls), float, n))
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,13 +109,13 @@ class Layout:
         −1 for the ground (a wall's fixed side): a "+" wall on bar w is (w, −1), a "−" wall
         (−1, w), a bar contact from a to b (a, b) (u_a − u_b <= g stops a moving towards b in
         +x, and b towards a in −x)."""
-        scene = self.scene
-        ahead = [w.bar if w.side == "+" else -1 for w in scene.walls]
-        behind = [w.bar if w.side == "-" else -1 for w in scene.walls]
-        ahead += [c.bar_a for c in scene.contacts]
-        behind += [c.bar_b for c in scene.contacts]
-        return (_read_only(np.array(ahead, dtype=np.intp)),
-                _read_only(np.array(behind, dtype=np.intp)))
+        contacts = self.scene.contacts
+        bars, _, signs, _ = _wall_columns(self.scene.walls)
+        ahead = np.concatenate((np.where(signs > 0, bars, -1),
+                                np.array([c.bar_a for c in contacts], dtype=np.intp)))
+        behind = np.concatenate((np.where(signs < 0, bars, -1),
+                                 np.array([c.bar_b for c in contacts], dtype=np.intp)))
+        return _read_only(ahead.astype(np.intp)), _read_only(behind.astype(np.intp))
 
     @cached_property
     def bar_loads(self) -> np.ndarray:
@@ -325,19 +337,18 @@ class Layout:
     @cached_property
     def rows(self) -> ContactRows:
         """The contact rows (:class:`ContactRows`)."""
-        walls, contacts = self.scene.walls, self.scene.contacts
-        n_walls, n_contacts = len(walls), len(contacts)
+        contacts = self.scene.contacts
+        n_contacts = len(contacts)
         offsets = self.node_offsets
 
-        def column(items: tuple, name: str, dtype: type) -> np.ndarray:
-            return np.fromiter((getattr(item, name) for item in items), dtype=dtype,
-                               count=len(items))
+        def column(name: str) -> np.ndarray:
+            return np.fromiter((getattr(c, name) for c in contacts), np.intp, n_contacts)
 
-        wall_nodes = offsets[column(walls, "bar", np.intp)] + column(walls, "node", np.intp)
-        a = offsets[column(contacts, "bar_a", np.intp)] + column(contacts, "node_a", np.intp)
-        b = offsets[column(contacts, "bar_b", np.intp)] + column(contacts, "node_b", np.intp)
-        signs = np.where(np.fromiter((w.side == "+" for w in walls), dtype=bool,
-                                     count=n_walls), 1.0, -1.0)
+        wall_bars, wall_nodes, signs, _ = _wall_columns(self.scene.walls)
+        n_walls = wall_nodes.size
+        wall_nodes = offsets[wall_bars] + wall_nodes
+        a = offsets[column("bar_a")] + column("node_a")
+        b = offsets[column("bar_b")] + column("node_b")
         return ContactRows(
             _read_only(np.concatenate((np.arange(n_walls), n_walls + np.arange(n_contacts),
                                        n_walls + np.arange(n_contacts))).astype(np.intp)),

@@ -15,6 +15,7 @@ rigid contact would leave undetermined, is refused (contactqp.feasibility).
 - :mod:`~contactqp.scene.sections`: the cross-sections and the element areas they give;
 - :mod:`~contactqp.scene.parts`: the value types, Bar, Support, Load, DistributedLoad, Wall,
   BarContact;
+- :mod:`~contactqp.scene.walls`: :class:`Walls`, many walls as arrays;
 - :mod:`~contactqp.scene.validation`: the checks of the parts together;
 - :mod:`~contactqp.scene.scene`: the Scene.
 """
@@ -43,10 +44,11 @@ from contactqp.scene.sections import (  # noqa: F401
     Section,
     section_areas,
 )
+from contactqp.scene.walls import Walls
 from contactqp.units import UNIT_SYSTEMS, Units
 
 __all__ = [
     "AREA_RULES", "MAX_ELEMENTS", "SECTIONS", "UNIT_SYSTEMS", "WALL_SIDES", "Bar", "BarContact",
     "Circle", "Dimension", "DistributedLoad", "HollowCircle", "Load", "Rectangle", "Scene",
-    "Section", "Support", "Units", "Wall", "section_areas",
+    "Section", "Support", "Units", "Wall", "Walls", "section_areas",
 ]

@@ -31,7 +31,9 @@ from contactqp.scene.validation import (
     _check_supports,
     _check_walls,
     _numbering,
+    check_wall_fields,
 )
+from contactqp.scene.walls import Walls
 from contactqp.units import UNIT_SYSTEMS, Units
 from contactqp.values import number, one_of, text, value_array
 
@@ -53,8 +55,9 @@ class Scene:
         The nodes held at u = 0.
     loads : sequence of Load
         The point loads.
-    walls : sequence of Wall
-        The rigid walls.
+    walls : sequence of Wall, or Walls
+        The rigid walls: :class:`Wall` objects, a :class:`Walls` (many walls as arrays, read
+        with no object per wall), or a list of both (joined into one Walls, in order).
     name : str
         How tables, charts and messages name the scene.
     distributed : sequence of DistributedLoad
@@ -74,7 +77,7 @@ class Scene:
     bars: tuple[Bar, ...]
     supports: tuple[Support, ...]
     loads: tuple[Load, ...] = ()
-    walls: tuple[Wall, ...] = ()
+    walls: tuple[Wall, ...] | Walls = ()
     name: str = "scene"
     distributed: tuple[DistributedLoad, ...] = ()
     contacts: tuple[BarContact, ...] = ()
@@ -82,10 +85,11 @@ class Scene:
 
     def __post_init__(self) -> None:
         for key, kind, plural in (("bars", Bar, "bar"), ("supports", Support, "support"),
-                                  ("loads", Load, "load"), ("walls", Wall, "wall"),
+                                  ("loads", Load, "load"),
                                   ("distributed", DistributedLoad, "distributed_load"),
                                   ("contacts", BarContact, "contact")):
             object.__setattr__(self, key, _items(getattr(self, key), kind, plural))
+        object.__setattr__(self, "walls", _wall_items(self.walls))
         if not self.bars:
             raise SceneError("bar: no bar; give at least one [bar]")
         text("name", self.name)
@@ -99,7 +103,7 @@ class Scene:
         _check_loads(self, node)
         walls = _check_walls(self, node, held)
         _check_contacts(self, node, held, walls)
-        conflict = impossible_constraints(self) or indeterminate_contacts(self)
+        conflict = _conflict(self)
         if conflict:
             raise SceneError(conflict)
 
@@ -137,9 +141,9 @@ class Scene:
                                tuple(replace(q, intensity=factor * q.intensity)
                                      for q in self.distributed))
 
-    def with_walls(self, walls: tuple[Wall, ...]) -> Scene:
-        """The same scene with other walls."""
-        return replace(self, walls=tuple(walls))
+    def with_walls(self, walls: tuple[Wall, ...] | Walls) -> Scene:
+        """The same scene with other walls (Wall objects, a :class:`Walls`, or both)."""
+        return replace(self, walls=walls if isinstance(walls, Walls) else tuple(walls))
 
     def with_values(self, loads: Any = None, gaps: Any = None) -> Scene:
         """The same scene with other load values and gaps, everything else kept: ``loads``
@@ -160,7 +164,9 @@ class Scene:
             n_walls = len(self.walls)
             values = value_array("gaps", gaps, (self.n_contacts,),
                                  "one per wall, then one per bar contact", OptionError)
-            changes["walls"] = _valued(self.walls, "gap", values[:n_walls])
+            changes["walls"] = (self.walls.with_gaps(values[:n_walls])
+                                if isinstance(self.walls, Walls)
+                                else _valued(self.walls, "gap", values[:n_walls]))
             changes["contacts"] = _valued(self.contacts, "gap", values[n_walls:])
         if not changes:
             return self
@@ -171,7 +177,7 @@ class Scene:
         for name, value in changes.items():
             object.__setattr__(scene, name, value)
         if gaps is not None:
-            conflict = impossible_constraints(scene) or indeterminate_contacts(scene)
+            conflict = _conflict(scene)
             if conflict:
                 raise SceneError(conflict)
         if "layout" in self.__dict__:
@@ -197,6 +203,42 @@ def _valued(items: tuple, name: str, values: np.ndarray) -> tuple:
         copy_.__dict__[name] = value
         made.append(copy_)
     return tuple(made)
+
+
+def _conflict(scene: Scene) -> str:
+    """:func:`impossible_constraints`, then :func:`indeterminate_contacts`: why the scene's
+    constraints leave a node no position or its contact forces undetermined, or "". A
+    scene without bar contacts is first checked in numpy passes: with walls alone the only
+    conflict is a node whose two walls' gaps sum below 0 (a wall repeating another is refused
+    before); the graph, a Python object and a text per wall, is made only to name it."""
+    # the numpy passes cost ~50 µs, the graph ~4 µs a wall: a few Wall objects go to the graph
+    if not scene.contacts and (isinstance(scene.walls, Walls) or len(scene.walls) > 16):
+        walls, n_nodes = Walls.of(scene.walls), sum(b.n_nodes for b in scene.bars)
+        offsets = np.concatenate(([0], np.cumsum([b.n_nodes for b in scene.bars])))
+        at = offsets[walls.bars] + walls.nodes
+        # at a node with a wall on each side, the room between them: its + and − gaps summed
+        room = np.bincount(at, walls.gaps, minlength=n_nodes)
+        both = np.bincount(at, minlength=n_nodes) == 2
+        if not (both & (room < 0.0)).any():
+            return ""
+    return impossible_constraints(scene) or indeterminate_contacts(scene)
+
+
+def _wall_items(values: Any) -> tuple[Wall, ...] | Walls:
+    """The scene's walls: Wall objects as a tuple (as before), a :class:`Walls` as it is, a
+    list holding a Walls joined into one Walls (the Wall objects' fields checked first)."""
+    if isinstance(values, Walls):
+        return values
+    if isinstance(values, (tuple, list)) and any(isinstance(v, Walls) for v in values):
+        rows = 0
+        for i, value in enumerate(values):
+            if not isinstance(value, (Wall, Walls)):
+                raise SceneError(f"wall[{i}] must be a contactqp.Wall or Walls, got {value!r}")
+            if isinstance(value, Wall):
+                check_wall_fields(f"wall[{rows}]", value)
+            rows += len(value) if isinstance(value, Walls) else 1
+        return Walls.of(values)
+    return _items(values, Wall, "wall")
 
 
 def _items(values: Any, kind: type, name: str) -> tuple:
