@@ -33,6 +33,8 @@ from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.qp import QPProblem, available_qp_solvers, qp_problem
 from contactqp.model import Layout, Model, build_model
 from contactqp.prepared import Batch, Prepared, prepare
+from contactqp.problem import Problem, load_problem, save_problem
+from contactqp.problem_result import ProblemResult
 from contactqp.report import detail_table, table
 from contactqp.result import Result
 from contactqp.scene import (
@@ -55,10 +57,10 @@ __version__ = "0.1.0"
 __all__ = [
     "CONTACT_KINDS", "FORMULATIONS", "GUARANTEE", "METHODS", "TOLERANCES", "UNIT_SYSTEMS", "Bar",
     "BarContact", "Batch", "ContactqpError", "DistributedLoad", "Layout", "Load", "LoadPath",
-    "Model", "OptionError", "Prepared", "QPProblem", "Result", "Run", "Scene", "SceneError",
+    "Model", "OptionError", "Prepared", "Problem", "ProblemResult", "QPProblem", "Result", "Run", "Scene", "SceneError",
     "SolverError", "SolverNotAvailable", "Support", "Tolerances", "Units", "Wall", "__version__",
     "available_qp_solvers", "build_model", "channel", "check", "compare", "convert_units",
     "default_scene", "detail_table", "first_contact_factor", "flat_patch", "load_path",
-    "load_scene", "minimal", "obstacle", "penalty_sweep", "prepare", "qp_problem",
-    "scene_from_dict", "scene_to_toml", "solve", "table", "wall_at_every_node",
+    "load_problem", "load_scene", "minimal", "obstacle", "penalty_sweep", "prepare", "qp_problem",
+    "save_problem", "scene_from_dict", "scene_to_toml", "solve", "table", "wall_at_every_node",
 ]
