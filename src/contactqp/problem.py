@@ -164,30 +164,39 @@ def _symmetric(K: sp.csr_array) -> None:
 
 
 def _rows(C: sp.csr_array, g: np.ndarray, equality: np.ndarray, names: tuple[str, ...]) -> None:
-    """No zero row, no row twice, and no pair of opposite rows that leave no room."""
+    """No zero row, no constraint twice, and no pair of parallel rows that leave no u."""
     empty = np.flatnonzero(np.diff(C.indptr) == 0)
     if empty.size:
         raise ProblemError(f"C row {empty[0]} ({names[empty[0]]}) is zero: it constrains "
                            "nothing (drop it)")
     scale = np.sqrt(np.asarray((C.multiply(C)).sum(axis=1)).reshape(-1))
     unit = sp.csr_array(sp.diags_array(1.0 / scale) @ C)
-    # rows equal or opposite up to a positive factor: compare their unit rows' products
-    gram = unit @ unit.T
-    gram = sp.triu(gram, k=1).tocoo()
-    for i, j, value in zip(gram.row, gram.col, gram.data):
-        if abs(value) < 1.0 - 1e-12:
-            continue
-        if value > 0.0 and not (equality[i] or equality[j]):
-            raise ProblemError(f"C rows {i} ({names[i]}) and {j} ({names[j]}) are the same row "
-                               f"(up to a positive factor): keep the one with the smaller gap")
-        if value > 0.0:
-            raise ProblemError(f"C rows {i} ({names[i]}) and {j} ({names[j]}) are the same row "
-                               "and one of them is an equality: keep one")
-        room = g[i] / scale[i] + g[j] / scale[j]  # C_i u <= g_i and −C_i u <= g_j·(s_i/s_j)
-        if room < -1e-12 * max(abs(g[i] / scale[i]), abs(g[j] / scale[j])):
-            raise ProblemError(f"C rows {i} ({names[i]}) and {j} ({names[j]}) are opposite and "
-                               f"their gaps sum below 0 ({g[i]!r} and {g[j]!r}): no u "
-                               "satisfies both")
+    gram = sp.triu(unit @ unit.T, k=1).tocoo()
+    parallel = np.abs(gram.data) >= 1.0 - 1e-12
+    for i, j, value in zip(gram.row[parallel], gram.col[parallel], gram.data[parallel]):
+        _parallel_pair(int(i), int(j), float(np.sign(value)), g / scale, equality, names)
+
+
+def _parallel_pair(i: int, j: int, sign: float, gaps: np.ndarray, equality: np.ndarray,
+                   names: tuple[str, ...]) -> None:
+    """Rows i and j are parallel (sign +1) or opposite (−1); ``gaps`` per unit row. The same
+    constraint twice, or two that no u meets at once, is an error; a parallel row whose gap
+    never binds is allowed (a redundant row)."""
+    pair = f"C rows {i} ({names[i]}) and {j} ({names[j]})"
+    a, b = gaps[i], sign * gaps[j]  # row j as a bound on c·u: <= b (sign +1) or >= b (−1)
+    tight = abs(a - b) <= 1e-12 * max(abs(a), abs(b))
+    if tight and (sign > 0 or equality[i] or equality[j]):
+        raise ProblemError(f"{pair} are the same constraint (the same row and gap, up to a "
+                           "positive factor): drop one")
+    if sign > 0:  # c·u <= a and c·u <= b: only equalities can conflict
+        clash = (equality[i] and equality[j]) or (equality[i] and a > b) or (
+            equality[j] and b > a)
+    else:  # c·u <= a and c·u >= b
+        clash = b > a and not tight or (equality[i] and equality[j] and not tight)
+    if clash:
+        raise ProblemError(f"{pair} are {'parallel' if sign > 0 else 'opposite'} and their "
+                           f"gaps ({gaps[i]:.6g} and {gaps[j]:.6g} per unit row) leave no u "
+                           "that satisfies both")
 
 
 def _prescribed(problem: Problem, n: int, C: sp.csr_array) -> tuple[np.ndarray, np.ndarray]:

@@ -69,6 +69,19 @@ def on_set(model: SparseModel, active: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return model.solve_K(model.P - model.C.T @ lam), lam
 
 
+def correction(model: SparseModel, rows: np.ndarray, residual: np.ndarray,
+                       gap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(δλ, δu) with K δu + C_Aᵀδλ = r (a residual force on the free dofs) and C_A δu = s
+    (``gap``, the rows' residual C_A u − g_A; default 0): δλ = W_AA⁻¹ (C_A K⁻¹ r − s),
+    δu = K⁻¹(r − C_Aᵀ δλ) (two solves)."""
+    y = model.solve_K(residual)
+    if not rows.size:
+        return np.zeros(0), y
+    rhs = model.C[rows] @ y - (0.0 if gap is None else gap)
+    dlam = small_solve(model.flexibility(rows), rhs)
+    return dlam, model.solve_K(residual - model.C[rows].T @ dlam)
+
+
 def entering(model: SparseModel, active: np.ndarray, u: np.ndarray, lam: np.ndarray
              ) -> np.ndarray:
     """The next set (module docstring): rows that pull leave, rows that pass their gap enter,
@@ -101,7 +114,21 @@ def solve_schur(model: SparseModel, contact: str = "inequality", *,
         model.n_contacts, lambda active: on_set(model, active),
         lambda active, u, lam: entering(model, active, u, lam) | equality,
         method="lagrange", max_iterations=max_iterations, start=start)
+    u, lam = refined(model, u, lam, np.flatnonzero((lam != 0.0) | equality))
     return Solution(u, lam, solver="lagrange", iterations=iterations, info=_info(model))
+
+
+def refined(model: SparseModel, u: np.ndarray, lam: np.ndarray, rows: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """One step of iterative refinement on the final set: the residuals K u − P + Cᵀλ (a
+    product with K) and C_A u − g_A corrected (:func:`correction`, two solves). Where K mixes
+    stiffnesses 1e6 apart, the set's first answer can leave a held row open by round-off
+    of W_AA (2.3e-11 m past an element of 1e12 N/m: 46 N of 6.6e10 N); one step removes it."""
+    residual = model.K @ u - model.P + model.C.T @ lam
+    dlam, du = correction(model, rows, residual, model.C[rows] @ u - model.g[rows])
+    lam = lam.copy()
+    lam[rows] -= dlam
+    return u - du, lam
 
 
 def _info(model: SparseModel) -> dict[str, int]:
