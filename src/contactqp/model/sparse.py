@@ -1,8 +1,9 @@
 """A user's problem → the sparse model: the prescribed dofs condensed out, K factorised once.
 
 The methods and the check call the same few operations the chain model offers: solve with K
-(:meth:`SparseModel.solve_K`), the contact operator K⁻¹Cᵀ column by column for the rows that
-need it (:meth:`SparseModel.columns`, kept once computed), K, P, C, g, and the scales F and U.
+(:meth:`SparseModel.solve_K`), the flexibility W = C_A K⁻¹ C_Aᵀ of the rows that need it
+(:meth:`SparseModel.flexibility`, from sparse forward solves kept once computed), K, P, C, g,
+and the scales F and U.
 
 Condensing (scikit-fem's ``condense``): with I the free dofs and D the prescribed ones, the
 unknowns are u_I, K_II u_I = f_I − K_ID u_D − C_Iᵀλ; C has no entry on D (the problem checks
@@ -30,6 +31,7 @@ from contactqp.errors import ProblemError, SolverError
 from contactqp.problem import Problem
 
 ORDERING = "MMD_AT_PLUS_A"  # SuperLU's fill-reducing ordering for symmetric K
+DENSE_REACH = 4000  # the forward solves go dense up to this many rows of L reached
 SINGULAR_PIVOT = 1e-11  # a pivot below this times the largest diagonal of K: K is singular
 HELD = 1e-8  # a mode x with ‖C x‖ below this × ‖C‖‖x‖ is held by no contact row
 
@@ -44,15 +46,27 @@ def factorise(K: sp.spmatrix, ordering: str = ORDERING) -> spla.SuperLU:
 
 @dataclass(eq=False)
 class ColumnCache:
-    """Y_i = L⁻¹ Pr c_i for the rows asked for so far (a column of a sparse matrix each, in
-    the order computed): W = C K⁻¹ Cᵀ = Yᵀ D⁻¹ Y (module docstring)."""
+    """Z_i = U⁻ᵀ Pr c_i for the rows asked for so far, dense on the rows they reach
+    (``support``, increasing; ``values``: support x rows, in the order computed):
+    W = C K⁻¹ Cᵀ = Zᵀ D Z (:meth:`SparseModel.flexibility`)."""
 
-    where: dict[int, int] = field(default_factory=dict)
-    blocks: list[sp.csc_array] = field(default_factory=list)
-    parent: np.ndarray | None = None  # the elimination tree of L
-    lower: sp.csr_matrix | None = None  # L (SuperLU builds a new copy at each .L)
     pivots: np.ndarray | None = None  # D, the diagonal of U (U = D Lᵀ, K symmetric)
+    where: dict[int, int] = field(default_factory=dict)
+    support: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
+    values: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    parent: np.ndarray | None = None  # the elimination tree of L
+    lower: sp.csr_matrix | None = None  # Uᵀ (SuperLU builds a new copy at each .U)
     solves: int = 0  # columns computed
+
+    def add(self, rows: list[int], nodes: np.ndarray, y: np.ndarray) -> None:
+        """Keep the columns y (on ``nodes``) of ``rows``."""
+        support = np.union1d(self.support, nodes)
+        values = np.zeros((support.size, self.values.shape[1] + len(rows)))
+        values[np.searchsorted(support, self.support), : self.values.shape[1]] = self.values
+        values[np.searchsorted(support, nodes), self.values.shape[1]:] = y
+        start = len(self.where)
+        self.where.update({row: start + k for k, row in enumerate(rows)})
+        self.support, self.values, self.solves = support, values, self.solves + len(rows)
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,24 +118,26 @@ class SparseModel:
                                ) if rhs.shape[1] else np.zeros(rhs.shape)
 
     def flexibility(self, rows: np.ndarray) -> np.ndarray:
-        """W = C_rows K⁻¹ C_rowsᵀ (rows x rows, dense): from the sparse forward solves
-        Y_i = L⁻¹ Pr c_i, computed once per row (:func:`forward_columns`)."""
+        """W = C_rows K⁻¹ C_rowsᵀ (rows x rows, dense). SuperLU gives Pr K Prᵀ = L U with the
+        diagonal pivots kept, and K symmetric makes U = D Lᵀ (D = diag U), so K⁻¹ =
+        Prᵀ U⁻¹ D U⁻ᵀ Pr and W = Zᵀ D Z with Z = U⁻ᵀ Pr Cᵀ: one sparse forward solve per row
+        (:func:`forward_columns`), computed once."""
         cache, rows = self.cache, np.asarray(rows, dtype=np.intp)
         new = [int(i) for i in dict.fromkeys(rows.tolist()) if int(i) not in cache.where]
         if new:
-            if cache.parent is None:
-                cache.lower = sp.csr_matrix(self.factor.L)
+            if self.factor is None:
+                self.solve_K(np.zeros(self.n_free))  # the SolverError that says why
+            if cache.parent is None:  # Uᵀ: lower triangular, L's structure (K symmetric)
+                cache.lower = sp.csr_matrix(self.factor.U.T)
                 cache.parent = elimination_tree(cache.lower)
-                cache.pivots = self.factor.U.diagonal()
-            block = forward_columns(self.factor.perm_r, cache.lower, cache.parent, self.C[new])
-            start = len(cache.where)
-            cache.where.update({row: start + k for k, row in enumerate(new)})
-            cache.blocks = [sp.csc_array(sp.hstack([*cache.blocks, block], format="csc"))]
-            cache.solves += len(new)
+            cache.add(new, *forward_columns(self.factor.perm_r, cache.lower, cache.parent,
+                                            self.C[new]))
         if not rows.size:
             return np.zeros((0, 0))
-        Y = cache.blocks[0][:, [cache.where[int(i)] for i in rows]]
-        W = (Y.T @ (Y.multiply(1.0 / cache.pivots[:, None]))).toarray()
+        Y = cache.values[:, [cache.where[int(i)] for i in rows]]
+        # einsum's own loops, not BLAS: OpenBLAS threads on a busy machine took 0.11 s for
+        # this product at 80 rows (0.75 ms on one thread, 3 ms here)
+        W = np.einsum("ik,il->kl", Y, Y * cache.pivots[cache.support, None], optimize=False)
         return 0.5 * (W + W.T)
 
     @cached_property
@@ -202,11 +218,12 @@ def reach(parent: np.ndarray, starts: np.ndarray) -> np.ndarray:
     return np.flatnonzero(seen)
 
 
-def forward_columns(perm_r: np.ndarray, L: sp.csr_matrix, parent: np.ndarray,
-                    rows: sp.csr_array) -> sp.csc_array:
-    """Y = L⁻¹ Pr Cᵀ for some rows of C, solved on the rows of L it reaches alone: a contact
-    row's column of L⁻¹ is zero off its elimination-tree path (1.5·10³ of 8.4·10⁴ entries on
-    the benchmark grid), so this costs a small fraction of a solve with K."""
+def forward_columns(perm_r: np.ndarray, lower: sp.csr_matrix, parent: np.ndarray,
+                    rows: sp.csr_array) -> tuple[np.ndarray, np.ndarray]:
+    """(the rows reached, Z there): Z = lower⁻¹ Pr Cᵀ for some rows of C (``lower`` = Uᵀ),
+    solved on the rows it reaches alone. A contact row's column is zero off its
+    elimination-tree path: 80 rows of the benchmark grid reach 2·10³ of its 8.4·10⁴ dofs
+    together, so this costs a fraction of one solve with K (dense up to DENSE_REACH rows)."""
     b = sp.csc_array(rows.T)
     permuted = perm_r[b.indices]  # Pr: row i of b goes to perm_r[i]
     nodes = reach(parent, np.unique(permuted))
@@ -215,12 +232,27 @@ def forward_columns(perm_r: np.ndarray, L: sp.csr_matrix, parent: np.ndarray,
     rhs = np.zeros((nodes.size, b.shape[1]))
     columns = np.repeat(np.arange(b.shape[1]), np.diff(b.indptr))
     rhs[local[permuted], columns] = b.data
-    sub = sp.csr_matrix(L[nodes][:, nodes])
-    y = spla.spsolve_triangular(sub, rhs, lower=True, unit_diagonal=True)
-    y = np.asarray(y).reshape(nodes.size, b.shape[1])
-    return sp.csc_array(sp.coo_array((y.reshape(-1), (np.repeat(nodes, b.shape[1]),
-                                                      np.tile(np.arange(b.shape[1]), nodes.size))),
-                                     shape=(parent.size, b.shape[1])))
+    sub = sp.csr_matrix(lower[nodes][:, nodes])
+    if nodes.size <= DENSE_REACH:
+        z = scipy.linalg.solve_triangular(sub.toarray(), rhs, lower=True, check_finite=False)
+    else:
+        z = spla.spsolve_triangular(sub, rhs, lower=True)
+    z = np.asarray(z).reshape(nodes.size, b.shape[1])
+    # the columns decay along the path into subnormal numbers, on which every later product
+    # runs many times slower; they are below any force
+    z[np.abs(z) < np.finfo(float).tiny] = 0.0
+    return nodes, z
+
+
+def diagonal_pivots(factor: spla.SuperLU) -> np.ndarray:
+    """The diagonal of SuperLU's U, read from its index arrays (scipy's .diagonal() of the
+    2.3·10⁶ entries of the benchmark's U took 0.46 s)."""
+    U = factor.U
+    columns = np.repeat(np.arange(U.shape[1]), np.diff(U.indptr))
+    on = U.indices == columns
+    pivots = np.zeros(U.shape[0])
+    pivots[columns[on]] = U.data[on]  # one diagonal entry per column
+    return pivots
 
 
 def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseModel:
@@ -235,26 +267,28 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseMode
     P = problem.f[free] - (K[free][:, problem.prescribed] @ problem.prescribed_values
                            if problem.prescribed.size else 0.0)
     C = sp.csr_array(problem.C[:, free])
-    factor = _factor_or_none(K_II, ordering)
+    factor, pivots = _factor_or_none(K_II, ordering)
     floating = None
     if factor is None:
         floating = free_modes(K_II)
         _held_by_contact(problem, free, C, floating)
-    return SparseModel(problem, free, K_II, P, C, problem.g, factor, floating)
+    return SparseModel(problem, free, K_II, P, C, problem.g, factor, floating,
+                       ColumnCache(pivots=pivots))
 
 
-def _factor_or_none(K: sp.csc_matrix, ordering: str) -> spla.SuperLU | None:
-    """The factorisation, or None where a pivot says K is singular."""
+def _factor_or_none(K: sp.csc_matrix, ordering: str
+                    ) -> tuple[spla.SuperLU | None, np.ndarray | None]:
+    """(the factorisation and its pivots), or (None, None) where a pivot says K is singular."""
     if K.shape[0] == 0:
-        return spla.splu(sp.csc_matrix((1, 1)) + sp.eye(1, format="csc"))
+        return spla.splu(sp.csc_matrix((1, 1)) + sp.eye(1, format="csc")), np.ones(1)
     try:
         factor = factorise(K, ordering)
     except RuntimeError:  # "Factor is exactly singular"
-        return None
-    pivots = np.abs(factor.U.diagonal())
-    if pivots.min() <= SINGULAR_PIVOT * float(np.abs(K.diagonal()).max()):
-        return None
-    return factor
+        return None, None
+    pivots = diagonal_pivots(factor)
+    if np.abs(pivots).min() <= SINGULAR_PIVOT * float(np.abs(K.diagonal()).max()):
+        return None, None
+    return factor, pivots
 
 
 def free_modes(K: sp.csc_matrix) -> np.ndarray:
@@ -290,5 +324,5 @@ def _held_by_contact(problem: Problem, free: np.ndarray, C: sp.csr_array,
                        f"touches, moving {where}: prescribe a dof or add a contact row there")
 
 
-__all__ = ["ORDERING", "SparseModel", "build_sparse_model", "elimination_tree", "factorise",
-           "forward_columns", "free_modes", "reach"]
+__all__ = ["ORDERING", "SparseModel", "build_sparse_model", "diagonal_pivots",
+           "elimination_tree", "factorise", "forward_columns", "free_modes", "reach"]
