@@ -19,6 +19,8 @@ from typing import Any
 from contactqp import __version__, formatting
 from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
+from contactqp.problem import Problem, load_problem
+from contactqp.problem_result import ProblemResult, problem_table
 from contactqp.report import detail_table, table
 from contactqp.result import Result
 from contactqp.scene import Scene, Units
@@ -44,7 +46,10 @@ STUDY_EXIT = ("exit status 0 when the table is produced, even where some runs fa
               "check: showing where each method fails is the point")
 
 
-def _scene(path: str | None) -> Scene:
+def _scene(path: str | None) -> Scene | Problem:
+    """The scene file, or a user's problem: an .npz bundle or a folder of .mtx files."""
+    if path is not None and (str(path).endswith(".npz") or Path(path).is_dir()):
+        return load_problem(path)
     return as_scene(path)
 
 
@@ -116,9 +121,13 @@ def command_solve(args: argparse.Namespace) -> int:
     result = solve(_scene(args.scene), args.method, args.contact, args.formulation, **options)
     if args.json:
         print(result.to_json())
+    elif isinstance(result, ProblemResult):
+        print(problem_table([result]) + ("\n\n" + result.summary() if args.detail else ""))
     else:
         _print_runs([Run(result.label, result.contact, result)], args.detail)
-    if getattr(args, "out", None) and _charts_wanted(args):  # solve draws only when asked
+    if isinstance(result, ProblemResult):
+        pass  # a problem has no bar to draw
+    elif getattr(args, "out", None) and _charts_wanted(args):  # solve draws only when asked
         from contactqp import plot  # matplotlib only when a chart is asked for
 
         _out(args).mkdir(parents=True, exist_ok=True)
@@ -264,7 +273,9 @@ def parser() -> argparse.ArgumentParser:
     def scene_command(name: str, handler, help_text: str,
                       epilog: str | None = None) -> argparse.ArgumentParser:
         sub = commands.add_parser(name, help=help_text, description=help_text, epilog=epilog)
-        sub.add_argument("scene", nargs="?", help="scene TOML file (default: the default scene)")
+        sub.add_argument("scene", nargs="?", help="scene TOML file (default: the default scene); "
+                         "solve also takes a problem: an .npz bundle or a folder of K.mtx, "
+                         "f.mtx, C.mtx, g.mtx (contactqp.save_problem)")
         sub.set_defaults(handler=handler)
         return sub
 

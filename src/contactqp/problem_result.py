@@ -148,6 +148,25 @@ class ProblemResult:
         return json.dumps(self.to_dict(), indent=indent, allow_nan=False)
 
 
+TABLE_HEADER = [("method", ""), ("contact", ""), ("contact force", "(largest)"),
+                ("penetration", "(largest)"), ("residual", ""), ("verified", ""),
+                ("time", "(ms)"), ("note", "")]
+
+
+def problem_table(results: list[ProblemResult]) -> str:
+    """One row per result, the columns of the scenes' table that a problem has (no exact
+    reference column: a problem's check measures its own distance to the exact answer)."""
+    rows = []
+    for r in results:
+        forces = formatting.forces_summary(r.contact_force, r.force_scale)
+        largest = max((v for v in r.residuals.values() if v is not None), default=0.0)
+        rows.append([r.label, r.contact, forces,
+                     formatting.number(float(np.max(r.penetration, initial=0.0)), ".3g"),
+                     formatting.number(largest, ".1e"), "yes" if r.verified else "NO",
+                     f"{1e3 * r.time:.2f}", "" if r.verified else r.message[:60]])
+    return formatting.text_table(TABLE_HEADER, rows)
+
+
 def make_problem_result(model: SparseModel, solution: Solution, *, method: str, contact: str,
                         options: dict[str, Any], timings: dict[str, float],
                         tolerances: Tolerances = TOLERANCES) -> ProblemResult:
@@ -174,4 +193,4 @@ def make_problem_result(model: SparseModel, solution: Solution, *, method: str, 
         warnings=tuple(warnings), info=dict(solution.info))
 
 
-__all__ = ["ProblemResult", "make_problem_result"]
+__all__ = ["ProblemResult", "make_problem_result", "problem_table"]
