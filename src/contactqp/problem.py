@@ -267,8 +267,33 @@ def validated(problem: Problem) -> dict[str, Any]:
 def save_problem(problem: Problem, path: str | os.PathLike) -> Path:
     """Write a problem to ``path``: one ``.npz`` bundle, or (a path without that suffix) a
     folder of Matrix Market files K.mtx, f.mtx, C.mtx, g.mtx plus ``extra.npz`` for the
-    rest. Returns the path written."""
-    path = Path(path)
+    rest (prescribed dofs, kinds, names, coordinates, units, name).
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem to write.
+    path : str or os.PathLike
+        ``something.npz``, or a folder (made if missing).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    ProblemError
+        The file or folder cannot be written (one line naming it and why).
+    """
+    try:
+        return _write(problem, Path(path))
+    except OSError as error:
+        raise ProblemError(f"cannot write problem {str(path)!r}: {error}") from None
+
+
+def _write(problem: Problem, path: Path) -> Path:
+    """:func:`save_problem`'s writing."""
     extra = {"prescribed": problem.prescribed, "prescribed_values": problem.prescribed_values,
              "kinds": np.array(problem.kinds, dtype=str), "names": np.array(problem.names, dtype=str),
              "units": np.array(problem.units), "name": np.array(problem.name)}
@@ -291,8 +316,27 @@ def save_problem(problem: Problem, path: str | os.PathLike) -> Path:
 def load_problem(path: str | os.PathLike, **fields: Any) -> Problem:
     """Read a problem written by :func:`save_problem`: an ``.npz`` bundle, or a folder with
     K.mtx, f.mtx, C.mtx and g.mtx (Matrix Market, as FE codes export them; ``extra.npz``
-    beside them optional). ``fields`` (prescribed, kinds, names, ...) are given to
-    :class:`Problem` over what the files say."""
+    beside them optional).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.npz`` file or the folder.
+    **fields
+        Given to :class:`Problem` over what the files say (prescribed, prescribed_values,
+        kinds, names, coordinates, units, name).
+
+    Returns
+    -------
+    Problem
+        The problem, validated.
+
+    Raises
+    ------
+    ProblemError
+        A missing or unreadable file, or a problem that is not valid (one line naming the
+        field and the value).
+    """
     path = Path(path)
     if not path.exists():
         raise ProblemError(f"problem file {str(path)!r} does not exist")

@@ -13,11 +13,29 @@ from contactqp.scene import Scene, row_names
 
 
 def problem_from_scene(scene: Scene | Layout) -> Problem:
-    """The scene's K (every node, the element stiffnesses along the chain), f (the nodal
-    loads, distributed loads lumped as the chain lumps them), C and g (a wall's ±1, a bar
-    contact's +1 at node a and −1 at node b; an end at a support contributes nothing, as in
-    the chain model), the supports as prescribed dofs at 0, the rows named as the scene names
-    them."""
+    """A bar scene as a :class:`~contactqp.Problem`: K over every node (the element
+    stiffnesses along the chain), f (the nodal loads, distributed loads lumped as the chain
+    lumps them), C and g (a wall's ±1, a bar contact's +1 at node a and −1 at node b; an end
+    at a support contributes nothing, as in the chain model), the supports as prescribed dofs
+    at 0, the rows named as the scene names them.
+
+    Parameters
+    ----------
+    scene : Scene or Layout
+        The scene (or its layout).
+
+    Returns
+    -------
+    Problem
+        Its K, f, C, g; ``contactqp.solve(problem)`` gives the scene's answer (a bar held
+        by contact alone gives a singular K, which only the QP methods take).
+
+    Raises
+    ------
+    ProblemError
+        Two rows of the scene that are the same constraint (two walls on one side of a node
+        with the same gap).
+    """
     layout = scene if isinstance(scene, Layout) else scene.layout
     scene = layout.scene
     n, k = layout.n_nodes, layout.link_stiffness  # k: 0 between bars
