@@ -252,3 +252,20 @@ def test_the_result_reads_like_a_scene_result():
     assert data["contact_force"] == pytest.approx(result.contact_force.tolist())
     assert set(data) >= {"u", "reactions", "penetration", "verified", "force_error_bound"}
     assert '"verified"' in result.to_json()
+
+
+def test_a_model_held_by_contact_alone():
+    """Three unit springs in a row, no support: a load of 1 at dof 3 pushes the chain towards
+    a wall at dof 0 (u_0 >= 0). K is singular; the wall holds it: λ = 1, u = [0, −1, −2, −3]
+    (each spring shortened by the force it carries)."""
+    n = 4
+    K = sp.diags_array([-np.ones(n - 1), np.r_[1.0, 2.0, 2.0, 1.0], -np.ones(n - 1)],
+                       offsets=[-1, 0, 1]).tocsr()
+    C = sp.csr_array(([-1.0], ([0], [0])), shape=(1, n))
+    problem = contactqp.Problem(K, -np.eye(n)[n - 1], C, [0.0])
+    for method, options in [("lagrange", {}), ("qp", {}), ("qp", {"backend": "osqp"})]:
+        result = contactqp.solve(problem, method, **options)
+        assert_within_bounds(result, np.array([0.0, -1.0, -2.0, -3.0]), np.array([1.0]))
+        assert result.verified or method != "lagrange"
+    with pytest.raises(SolverError, match="needs K⁻¹"):
+        contactqp.solve(problem, "lemke")

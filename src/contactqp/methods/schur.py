@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from contactqp.errors import SolverError
 from contactqp.methods._active_set import DECISION_RTOL, active_set_loop
@@ -60,20 +62,42 @@ def small_solve(W: np.ndarray, rhs: np.ndarray) -> np.ndarray:
 def on_set(model: SparseModel, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(u on the free dofs, λ per row) with the rows in ``active`` held on their gaps and the
     others carrying nothing: the equality-constrained problem, exactly (module docstring)."""
-    u0 = model.free_displacement
     lam = np.zeros(model.n_contacts)
     rows = np.flatnonzero(active)
+    if model.factor is None:  # K singular, held by contact rows: the saddle-point system
+        u, lam[rows] = saddle_solve(model, rows, model.P, model.g[rows])
+        return u, lam
+    u0 = model.free_displacement
     if not rows.size:
         return u0.copy(), lam
     lam[rows] = small_solve(model.flexibility(rows), model.C[rows] @ u0 - model.g[rows])
     return model.solve_K(model.P - model.C.T @ lam), lam
 
 
+def saddle_solve(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """(u, λ_rows) with K u + C_Aᵀλ = force and C_A u = gap, by one sparse LU of
+    [[K, C_Aᵀ], [C_A, 0]]: for a K that only contact rows hold (no factorisation of K alone
+    exists). A SolverError where the rows do not hold what K leaves free."""
+    C_A = model.C[rows]
+    matrix = sp.csc_matrix(sp.bmat([[model.K, C_A.T], [C_A, None]]))
+    try:
+        x = spla.splu(matrix).solve(np.concatenate((force, gap)))
+    except RuntimeError:
+        raise SolverError(f"K is singular and the {rows.size} rows held do not hold what it "
+                          "leaves free") from None
+    return x[: model.n_free], x[model.n_free:]
+
+
 def correction(model: SparseModel, rows: np.ndarray, residual: np.ndarray,
                        gap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(δλ, δu) with K δu + C_Aᵀδλ = r (a residual force on the free dofs) and C_A δu = s
     (``gap``, the rows' residual C_A u − g_A; default 0): δλ = W_AA⁻¹ (C_A K⁻¹ r − s),
-    δu = K⁻¹(r − C_Aᵀ δλ) (two solves)."""
+    δu = K⁻¹(r − C_Aᵀ δλ) (two solves; the saddle-point system where K is singular)."""
+    if model.factor is None:
+        du, dlam = saddle_solve(model, rows, residual,
+                                np.zeros(rows.size) if gap is None else gap)
+        return dlam, du
     y = model.solve_K(residual)
     if not rows.size:
         return np.zeros(0), y
@@ -107,8 +131,10 @@ def solve_schur(model: SparseModel, contact: str = "inequality", *,
     if equality.all():
         u, lam = on_set(model, equality)
         return Solution(u, lam, solver="lagrange", info=_info(model))
-    start = equality | (model.C @ model.free_displacement - model.g > 0.0)
-    if start.sum() > ENTER_MIN:  # the deepest first, as every later step
+    if model.factor is None:  # K singular: from every row held, so that the mode is held
+        start = np.ones(model.n_contacts, dtype=bool)
+    elif (start := equality | (model.C @ model.free_displacement - model.g > 0.0)
+          ).sum() > ENTER_MIN:  # the deepest first, as every later step
         start = entering(model, equality, model.free_displacement, np.zeros(model.n_contacts))
     u, lam, iterations = active_set_loop(
         model.n_contacts, lambda active: on_set(model, active),
