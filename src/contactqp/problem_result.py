@@ -115,15 +115,8 @@ class ProblemResult:
         return formatting.wrap("\n".join(lines))
 
     def _forces(self, most: int = 6) -> str:
-        forces, names = self.contact_force, self.problem.names
-        shown = [i for i in np.argsort(-np.abs(forces), kind="stable")
-                 if formatting.carrying(forces[i], self.force_scale)]
-        text = ", ".join(f"{names[i]} {formatting.force(forces[i], self.force_scale)}"
-                         for i in shown[:most])
-        if len(shown) > most:
-            text += f", … ({len(shown) - most} more)"
-        rest = forces.size - len(shown)
-        return text + (f"{'; ' if shown else ''}{rest} of {forces.size} carry none" if rest else "")
+        return formatting.carrying_forces(self.contact_force, self.problem.names,
+                                          self.force_scale, most)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (plain floats and lists; the keys of a scene's Result that
