@@ -31,7 +31,7 @@ from contactqp.model.sparse import SparseModel
 from contactqp.result import Solution
 
 PSEUDO_INVERSE_RTOL = 1e-12  # eigenvalues of the scaled W_AA below this × the largest: redundant
-ENTER_MIN = 16  # at least this many rows may enter in one step
+ENTER_MIN = 64  # at least this many rows may enter in one step
 ENTER_FACTOR = 1.0  # ... or this many times the set's size
 
 

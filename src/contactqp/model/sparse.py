@@ -110,6 +110,8 @@ class SparseModel:
             raise SolverError("K is singular (a mode only contact rows hold): this method "
                               "needs K⁻¹; use qp or penalty")
         rhs = np.asarray(rhs, dtype=float)
+        if self.n_free == 0:  # every dof prescribed: nothing to solve
+            return rhs.copy()
         if rhs.ndim == 1:
             return self.factor.solve(rhs)
         # one column at a time: SuperLU's multi-column solve costs more than the columns
@@ -127,8 +129,7 @@ class SparseModel:
         if new:
             if self.factor is None:
                 self.solve_K(np.zeros(self.n_free))  # the SolverError that says why
-            if cache.parent is None:  # Uᵀ: lower triangular, L's structure (K symmetric)
-                cache.lower = sp.csr_matrix(self.factor.U.T)
+            if cache.parent is None:
                 cache.parent = elimination_tree(cache.lower)
             cache.add(new, *forward_columns(self.factor.perm_r, cache.lower, cache.parent,
                                             self.C[new]))
@@ -244,10 +245,9 @@ def forward_columns(perm_r: np.ndarray, lower: sp.csr_matrix, parent: np.ndarray
     return nodes, z
 
 
-def diagonal_pivots(factor: spla.SuperLU) -> np.ndarray:
+def diagonal_pivots(U: sp.csc_matrix) -> np.ndarray:
     """The diagonal of SuperLU's U, read from its index arrays (scipy's .diagonal() of the
     2.3·10⁶ entries of the benchmark's U took 0.46 s)."""
-    U = factor.U
     columns = np.repeat(np.arange(U.shape[1]), np.diff(U.indptr))
     on = U.indices == columns
     pivots = np.zeros(U.shape[0])
@@ -267,28 +267,30 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseMode
     P = problem.f[free] - (K[free][:, problem.prescribed] @ problem.prescribed_values
                            if problem.prescribed.size else 0.0)
     C = sp.csr_array(problem.C[:, free])
-    factor, pivots = _factor_or_none(K_II, ordering)
+    factor, cache = _factor_or_none(K_II, ordering)
     floating = None
     if factor is None:
         floating = free_modes(K_II)
         _held_by_contact(problem, free, C, floating)
-    return SparseModel(problem, free, K_II, P, C, problem.g, factor, floating,
-                       ColumnCache(pivots=pivots))
+    return SparseModel(problem, free, K_II, P, C, problem.g, factor, floating, cache)
 
 
 def _factor_or_none(K: sp.csc_matrix, ordering: str
-                    ) -> tuple[spla.SuperLU | None, np.ndarray | None]:
-    """(the factorisation and its pivots), or (None, None) where a pivot says K is singular."""
+                    ) -> tuple[spla.SuperLU | None, ColumnCache]:
+    """(the factorisation, a cache holding its pivots and Uᵀ), or (None, an empty cache)
+    where a pivot says K is singular. U is read once (scipy copies it out at each .U)."""
     if K.shape[0] == 0:
-        return spla.splu(sp.csc_matrix((1, 1)) + sp.eye(1, format="csc")), np.ones(1)
+        K = sp.eye(1, format="csc")
     try:
         factor = factorise(K, ordering)
     except RuntimeError:  # "Factor is exactly singular"
-        return None, None
-    pivots = diagonal_pivots(factor)
+        return None, ColumnCache()
+    U = factor.U
+    pivots = diagonal_pivots(U)
     if np.abs(pivots).min() <= SINGULAR_PIVOT * float(np.abs(K.diagonal()).max()):
-        return None, None
-    return factor, pivots
+        return None, ColumnCache()
+    # Uᵀ: lower triangular with L's structure (K symmetric), for the forward solves
+    return factor, ColumnCache(pivots=pivots, lower=sp.csr_matrix(U.T))
 
 
 def free_modes(K: sp.csc_matrix) -> np.ndarray:
