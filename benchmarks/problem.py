@@ -1,7 +1,8 @@
 """A user's own model at the size of the Hertz mesh: the exact method and its check against one
 sparse factor-and-solve of K in the same run.
 
-    python benchmarks/problem.py [--nx 300] [--ny 280] [--repeat 3] [--methods lagrange,...]
+    python benchmarks/problem.py [--nx 300] [--ny 280] [--repeat 3]
+                                 [--methods lagrange,penalty,augmented,qp/clarabel,qp/osqp]
 
 The problem: a 2D grid of nx x ny nodes, one unknown each (the vertical displacement u; K the
 5-point Laplacian times a stiffness, from scipy.sparse kron products), the top edge pushed
@@ -73,17 +74,20 @@ def main() -> None:
         base = floor(problem, ORDERING)
         colamd = floor(problem, "COLAMD")
         print(f"floor: factor-and-solve {base:.3f} s (minimum degree), {colamd:.3f} s (COLAMD)")
-        for method in args.methods.split(","):
+        for name in args.methods.split(","):
+            method, _, backend = name.partition("/")  # "qp/osqp": the QP method by OSQP
+            options = {"backend": backend} if backend else {}
             start = time.perf_counter()
-            result = contactqp.solve(problem, method)
+            result = contactqp.solve(problem, method, **options)
             total = time.perf_counter() - start
             t = result.timings
-            print(f"  {method:18s} {total:.3f} s = {total / base:.2f} x floor (model "
+            print(f"  {name:18s} {total:.3f} s = {total / base:.2f} x floor (model "
                   f"{t['build']:.3f}, method {t['solve']:.3f}, check {t['check']:.3f} = "
                   f"{t['check'] / base:.2f} x); {result.iterations} iterations, "
                   f"{result.info.get('columns', '-')} columns, "
                   f"{int(np.count_nonzero(result.contact_force > 0))} rows push, "
-                  f"verified {result.verified}")
+                  f"verified {result.verified}"
+                  + ("" if result.verified else f" ({result.message[:120]})"))
 
 
 if __name__ == "__main__":
