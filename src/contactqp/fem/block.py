@@ -12,10 +12,9 @@ each other.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from contactqp.fem._skfem import require_skfem
-from contactqp.fem.elasticity import dof_coordinates, plane_strain_stiffness
+from contactqp.fem.elasticity import dof_coordinates, plane_strain_stiffness, rows_above_flat
 from contactqp.problem import Problem
 
 
@@ -53,8 +52,7 @@ def block_on_wavy_foundation(length: float = 20.0, height: float = 10.0,
     top = np.flatnonzero(y > height - tol)
     bottom = np.flatnonzero(y < tol)
     bottom = bottom[np.argsort(x[bottom])]
-    C = sp.csr_array((-np.ones(bottom.size), (np.arange(bottom.size), dofs[1, bottom])),
-                     shape=(bottom.size, K.shape[0]))
+    C = rows_above_flat(dofs, bottom)
     gap = amplitude * (1.0 - np.cos(2.0 * np.pi * waves * x[bottom] / length))
     return Problem(
         K, np.zeros(K.shape[0]), C, gap,

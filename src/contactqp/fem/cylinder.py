@@ -14,9 +14,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
-from contactqp.fem.elasticity import dof_coordinates, plane_strain_stiffness, tributary_lengths
+from contactqp.fem.elasticity import (
+    dof_coordinates,
+    plane_strain_stiffness,
+    rows_above_flat,
+    tributary_lengths,
+)
 from contactqp.fem.hertz import hertz_half_width, hertz_peak_pressure
 from contactqp.fem.mesh import graded_quarter_disk
 from contactqp.problem import Problem
@@ -97,8 +101,7 @@ def cylinder_on_flat(radius: float = 10.0, young: float = 210e3, poisson: float 
     symmetry, cut = np.flatnonzero(x < tol), np.flatnonzero(y > radius - tol)
     arc = _arc_nodes(mesh, radius)
     rows = arc[x[arc] <= zone * (1.0 + 1e-9)]
-    C = sp.csr_array((-np.ones(rows.size), (np.arange(rows.size), dofs[1, rows])),
-                     shape=(rows.size, K.shape[0]))
+    C = rows_above_flat(dofs, rows)
     problem = Problem(
         K, np.zeros(K.shape[0]), C, y[rows],
         prescribed=np.concatenate([dofs[0, symmetry], dofs[1, cut]]),

@@ -41,6 +41,20 @@ def dof_coordinates(mesh, dofs: np.ndarray) -> np.ndarray:
     return coordinates
 
 
+def rows_above_flat(dofs: np.ndarray, nodes: np.ndarray) -> sp.csr_array:
+    """C of the rows −u_y ≤ g, one per node (a node may not move down by more than its gap).
+
+    Parameters
+    ----------
+    dofs : int array, 2 x nodes
+        The dof numbering of :func:`plane_strain_stiffness`.
+    nodes : int array, m
+        The nodes, in the order of the rows.
+    """
+    return sp.csr_array((-np.ones(nodes.size), (np.arange(nodes.size), dofs[1, nodes])),
+                        shape=(nodes.size, dofs.size))
+
+
 def tributary_lengths(x: np.ndarray) -> np.ndarray:
     """The length of surface each of a row of boundary nodes carries (half to each neighbour).
 

@@ -16,13 +16,6 @@ import numpy as np
 from contactqp.fem._skfem import require_skfem
 
 
-def _on_arc(points: np.ndarray, radius: float) -> np.ndarray:
-    """The nodes of a quarter-disk mesh that lie on its arc (neither straight edge inside)."""
-    x, y = points
-    tol = 1e-12 * radius
-    return (np.hypot(x, y - radius) > radius * (1.0 - 1e-3)) & (y < radius - tol) & (x > tol)
-
-
 def _project_arc(mesh, boundary: np.ndarray, radius: float):
     """The mesh with its boundary nodes off the straight edges moved onto the circle."""
     points = mesh.p.copy()
