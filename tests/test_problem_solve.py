@@ -16,7 +16,7 @@ import scipy.sparse as sp
 
 import contactqp
 from contactqp.errors import OptionError, SolverError
-from contactqp.methods.complementarity import LCP_ENTRIES
+from contactqp.methods.complementarity import LCP_ROWS
 from contactqp.model.sparse import build_sparse_model
 
 # the bound holds up to the round-off of comparing floats with the exact answer: a few
@@ -236,12 +236,13 @@ def test_nitsche_and_chain_options_are_refused_with_the_reason():
 
 
 def test_the_lcp_methods_refuse_beyond_their_stated_size():
-    n = LCP_ENTRIES // 2 + 1  # two rows: n x 2 entries of K⁻¹Cᵀ pass the limit
+    n = LCP_ROWS + 1  # a row on every dof: one row more than W may have
     K = sp.diags_array(np.full(n, 2.0)).tocsr()
-    C = sp.csr_array(([1.0, 1.0], ([0, 1], [0, 1])), shape=(2, n))
-    problem = contactqp.Problem(K, np.ones(n), C, [0.1, 0.2])
+    problem = contactqp.Problem(K, np.ones(n), sp.eye_array(n, format="csr"), np.full(n, 0.1))
     with pytest.raises(SolverError, match="use lagrange"):
         contactqp.solve(problem, "lemke")
+    result = contactqp.solve(problem, "penalty")  # a wall at 0.1 holds each dof: λ = 1 − 2·0.1
+    assert result.verified and np.allclose(result.contact_force, 0.8, rtol=1e-5)
 
 
 def test_the_result_reads_like_a_scene_result():

@@ -24,7 +24,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import scipy.io
 import scipy.sparse as sp
 
 from contactqp.errors import ProblemError
@@ -305,6 +304,8 @@ def _write(problem: Problem, path: Path) -> Path:
                             C_data=C.data, C_indices=C.indices, C_indptr=C.indptr,
                             C_shape=np.array(C.shape), f=problem.f, g=problem.g, **extra)
         return path
+    import scipy.io  # only for Matrix Market files
+
     path.mkdir(parents=True, exist_ok=True)
     for file, value in zip(MATRIX_MARKET, (problem.K, problem.f, problem.C, problem.g)):
         scipy.io.mmwrite(path / file, sp.coo_matrix(value) if sp.issparse(value)
@@ -379,6 +380,8 @@ def _read_folder(path: Path) -> dict[str, Any]:
     if missing:
         raise ProblemError(f"problem folder {str(path)!r} lacks {', '.join(missing)} (it needs "
                            f"{', '.join(MATRIX_MARKET)})")
+    import scipy.io  # only for Matrix Market files
+
     K, f, C, g = (scipy.io.mmread(path / file) for file in MATRIX_MARKET)
     arrays = {"K": K, "f": np.asarray(f).reshape(-1), "C": C, "g": np.asarray(g).reshape(-1)}
     extra = path / "extra.npz"

@@ -21,16 +21,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
+
+if TYPE_CHECKING:  # scipy.linalg and scipy.sparse.linalg load at the first solve (start-up)
+    import scipy.sparse.linalg as spla
 
 from contactqp.errors import ProblemError, SolverError
 from contactqp.problem import Problem
 
 ORDERING = "MMD_AT_PLUS_A"  # SuperLU's fill-reducing ordering for symmetric K
+EINSUM_WORK = 10**8  # multiply-adds up to which W is formed by einsum rather than BLAS
 DENSE_REACH = 4000  # the forward solves go dense up to this many rows of L reached
 SINGULAR_PIVOT = 1e-11  # a pivot below this times the largest diagonal of K: K is singular
 HELD = 1e-8  # a mode x with ‖C x‖ below this × ‖C‖‖x‖ is held by no contact row
@@ -39,6 +42,8 @@ HELD = 1e-8  # a mode x with ‖C x‖ below this × ‖C‖‖x‖ is held by n
 def factorise(K: sp.spmatrix, ordering: str = ORDERING) -> spla.SuperLU:
     """SuperLU of a symmetric positive (semi)definite K: ``ordering`` of the columns, the
     diagonal pivots kept (symmetric mode), so the factors have the symmetric fill."""
+    import scipy.sparse.linalg as spla
+
     options = {"SymmetricMode": True} if ordering == ORDERING else {}
     return spla.splu(sp.csc_matrix(K), permc_spec=ordering,
                      diag_pivot_thresh=0.0 if ordering == ORDERING else 1.0, options=options)
@@ -57,6 +62,7 @@ class ColumnCache:
     parent: np.ndarray | None = None  # the elimination tree of L
     lower: sp.csr_matrix | None = None  # Uᵀ (SuperLU builds a new copy at each .U)
     solves: int = 0  # columns computed
+    solver: tuple[bytes, Any] | None = None  # (rows, W_AA's solver) of the last set solved
 
     def add(self, rows: list[int], nodes: np.ndarray, y: np.ndarray) -> None:
         """Keep the columns y (on ``nodes``) of ``rows``."""
@@ -136,9 +142,7 @@ class SparseModel:
         if not rows.size:
             return np.zeros((0, 0))
         Y = cache.values[:, [cache.where[int(i)] for i in rows]]
-        # einsum's own loops, not BLAS: OpenBLAS threads on a busy machine took 0.11 s for
-        # this product at 80 rows (0.75 ms on one thread, 3 ms here)
-        W = np.einsum("ik,il->kl", Y, Y * cache.pivots[cache.support, None], optimize=False)
+        W = _gram(Y, Y * cache.pivots[cache.support, None])
         return 0.5 * (W + W.T)
 
     @cached_property
@@ -197,6 +201,17 @@ class SparseModel:
         return K_D @ u - problem.f[problem.prescribed]
 
 
+def _gram(Y: np.ndarray, Z: np.ndarray) -> np.ndarray:
+    """Yᵀ Z for the flexibility: sparse where Y is (rows that reach few dofs, e.g. a row on
+    every dof of a diagonal K), by einsum's own loops while small (OpenBLAS threads on a busy
+    machine took 0.11 s for 80 rows x 2·10³ dofs, einsum 3 ms), else by BLAS."""
+    if np.count_nonzero(Y) < 0.1 * Y.size:
+        return (sp.csc_array(Y).T @ sp.csc_array(Z)).toarray()
+    if Y.shape[1] ** 2 * Y.shape[0] <= EINSUM_WORK:
+        return np.einsum("ik,il->kl", Y, Z, optimize=False)
+    return Y.T @ Z
+
+
 def elimination_tree(L: sp.spmatrix) -> np.ndarray:
     """parent[j]: the first row below the diagonal in column j of L (−1 for a root)."""
     L = sp.csc_matrix(L)
@@ -234,6 +249,9 @@ def forward_columns(perm_r: np.ndarray, lower: sp.csr_matrix, parent: np.ndarray
     columns = np.repeat(np.arange(b.shape[1]), np.diff(b.indptr))
     rhs[local[permuted], columns] = b.data
     sub = sp.csr_matrix(lower[nodes][:, nodes])
+    import scipy.linalg
+    import scipy.sparse.linalg as spla
+
     if nodes.size <= DENSE_REACH:
         z = scipy.linalg.solve_triangular(sub.toarray(), rhs, lower=True, check_finite=False)
     else:
@@ -299,6 +317,8 @@ def free_modes(K: sp.csc_matrix) -> np.ndarray:
     n = K.shape[0]
     shift = 1e-10 * float(np.abs(K.diagonal()).max())
     factor = factorise(K + shift * sp.eye(n, format="csc"))
+    import scipy.linalg
+
     trial = np.random.default_rng(0).standard_normal((n, min(n, 8)))
     for _ in range(3):
         trial = scipy.linalg.qr(factor.solve(trial), mode="economic")[0]
