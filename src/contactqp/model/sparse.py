@@ -114,7 +114,7 @@ class SparseModel:
         """K⁻¹ rhs (one column or several) with the factorisation."""
         if self.factor is None:
             raise SolverError("K is singular (a mode only contact rows hold): this method "
-                              "needs K⁻¹; use qp or penalty")
+                              "needs K⁻¹; use lagrange or qp")
         rhs = np.asarray(rhs, dtype=float)
         if self.n_free == 0:  # every dof prescribed: nothing to solve
             return rhs.copy()
