@@ -38,6 +38,7 @@ def hertz_peak_pressure(load: float, radius: float, young: float, poisson: float
 
 
 def hertz_pressure(x: np.ndarray, half_width: float, peak: float) -> np.ndarray:
-    """Hertz's elliptical pressure p₀√(1 − (x/a)²), zero outside |x| < a (stress units)."""
+    """Hertz's elliptical pressure p₀√(1 − (x/a)²) inside the strip −a < x < a, zero outside
+    it (stress units)."""
     ratio = np.clip(np.abs(np.asarray(x, dtype=float)) / half_width, 0.0, 1.0)
     return peak * np.sqrt(1.0 - ratio**2)
