@@ -141,13 +141,15 @@ def speed(fine: float, methods: tuple[str, ...], backends: tuple[str, ...]) -> N
         check = result.timings.get("check", float("nan"))
         print(f"  {label:22s} {seconds:8.2f} s = {seconds / base:6.2f} x floor; check "
               f"{check:.3f} s = {check / base:.2f} x; verified {result.verified}; "
-              f"{hertz_errors(model, result.contact_force)}")
+              f"{hertz_errors(model, result)}")
 
 
-def hertz_errors(model: CylinderModel, contact_force: np.ndarray) -> str:
-    """The errors of a and p₀ against Hertz, or why they cannot be read."""
+def hertz_errors(model: CylinderModel, result) -> str:
+    """The errors of a and p₀ against Hertz (forces within the check's bound of zero read as
+    zero), or why they cannot be read."""
+    bound = result.force_error_bound
     try:
-        comparison = measure(model, contact_force)
+        comparison = measure(model, result.contact_force, bound if np.isfinite(bound) else 0.0)
     except ValueError as error:
         return str(error)
     return f"a {comparison.half_width_error:+.2%}, p0 {comparison.peak_pressure_error:+.2%}"

@@ -126,6 +126,20 @@ def test_coarse_cylinder_is_near_hertz(cylinder):
     assert comparison.load == pytest.approx(-2 * result.reactions.sum(), rel=1e-9)
 
 
+def test_measure_reads_forces_within_the_resolution_as_zero(cylinder):
+    """An inexact answer's small forces on open rows (here 1e-3 of the peak, as a QP solver
+    at its default accuracy leaves them) would widen the contact; within ``resolution``
+    they are read as zero and a is the exact answer's."""
+    model, result = cylinder
+    noise = 1e-3 * result.contact_force.max()
+    noisy = result.contact_force + noise
+    exact = measure(model, result.contact_force)
+    assert measure(model, noisy, resolution=1.5 * noise).half_width == pytest.approx(
+        exact.half_width, rel=0.05)
+    with pytest.raises(ValueError, match="widen the zone"):
+        measure(model, noisy)
+
+
 def test_measure_refuses_a_contact_wider_than_the_zone():
     model = cylinder_on_flat(R, E, NU, approach=0.01, zone=0.15, fine=0.03)
     result = contactqp.solve(model.problem, "lagrange")
