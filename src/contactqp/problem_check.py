@@ -37,7 +37,7 @@ import numpy as np
 
 from contactqp.check import TOLERANCES, Check, Tolerances, natural_map
 from contactqp.errors import SolverError
-from contactqp.methods.schur import correction, on_set
+from contactqp.methods.schur import correction, on_set, redundant
 from contactqp.model.sparse import SparseModel
 
 HOLD = 1e-6  # a row that pushes more than this × F, or touches within this × U, is in the set
@@ -69,8 +69,9 @@ def residuals(model: SparseModel, u: np.ndarray, lam: np.ndarray, equality: np.n
 
 
 def reference(model: SparseModel, lam: np.ndarray, pen: np.ndarray, equality: np.ndarray
-              ) -> tuple[np.ndarray, np.ndarray, float, float] | None:
-    """(u*, λ*, its force error, its displacement error) on the answer's set, the set
+              ) -> tuple[np.ndarray, np.ndarray, float, float, np.ndarray] | None:
+    """(u*, λ*, its force error, its displacement error, the set's rows) on the answer's set,
+    the set
     corrected up to REFINE times (module docstring); None when no set gives the exact answer
     or the reference's own refinement does not converge."""
     F, U = model.force_scale, model.displacement_scale
@@ -90,7 +91,7 @@ def reference(model: SparseModel, lam: np.ndarray, pen: np.ndarray, equality: np
                                           0.0).max(initial=0.0))
             seen = float(model.row_stiffness.max(initial=0.0))
             return (u_ref, lam_ref, force + missed_sign + missed_gap * seen,
-                    move + missed_gap)
+                    move + missed_gap, np.flatnonzero(active))
         active = (active & ~pulls) | passes
     return None
 
@@ -160,10 +161,13 @@ def check_problem(model: SparseModel, u_free: np.ndarray, lam: np.ndarray,
         force_bound = displacement_bound = math.inf
         why = "the check found no exact answer near this answer's contact set"
     else:
-        u_ref, lam_ref, force_error, move_error = exact
+        u_ref, lam_ref, force_error, move_error, rows = exact
         u_full, ref_full = model.full_displacements(u_free), model.full_displacements(u_ref)
         reactions = model.reactions(u_full) - model.reactions(ref_full)
-        force_bound = max(float(np.abs(lam - lam_ref).max(initial=0.0)),
+        # redundant rows: the exact answer fixes only their forces on the dofs, Cᵀλ (as a
+        # loop of rows on a scene's node); the bound is then for those
+        forces = (model.C.T @ (lam - lam_ref)) if redundant(model, rows) else lam - lam_ref
+        force_bound = max(float(np.abs(forces).max(initial=0.0)),
                           float(np.abs(reactions).max(initial=0.0))) + force_error
         displacement_bound = float(np.abs(u_free - u_ref).max(initial=0.0)) + move_error
         why = ""

@@ -62,7 +62,8 @@ class ColumnCache:
     parent: np.ndarray | None = None  # the elimination tree of L
     lower: sp.csr_matrix | None = None  # Uᵀ (SuperLU builds a new copy at each .U)
     solves: int = 0  # columns computed
-    solver: tuple[bytes, Any] | None = None  # (rows, W_AA's solver) of the last set solved
+    solver: tuple[bytes, Any, bool] | None = None  # (rows, W_AA's solver, singular) of the
+    # last set solved
 
     def add(self, rows: list[int], nodes: np.ndarray, y: np.ndarray) -> None:
         """Keep the columns y (on ``nodes``) of ``rows``."""
