@@ -26,7 +26,8 @@ QUICK_START = (
 )
 # Classes contactqp builds and hands out (solve() a Result, prepare() a Prepared, …): nobody
 # constructs them, so their fields are documented under Attributes, not Parameters.
-BUILT_BY_THE_LIBRARY = {"Result", "Batch", "Prepared", "Run", "LoadPath", "Model", "QPProblem"}
+BUILT_BY_THE_LIBRARY = {"Result", "Batch", "Prepared", "Run", "LoadPath", "Model", "QPProblem",
+                        "ProblemResult"}
 # Functions that raise nothing of their own, so they have no Raises section.
 RAISE_NOTHING = {"table", "detail_table", "available_qp_solvers", "scene_to_toml", "minimal"}
 PUBLIC = [getattr(contactqp, name) for name in contactqp.__all__]

@@ -25,6 +25,7 @@ from contactqp.curve import LoadPath, first_contact_factor, load_path
 from contactqp.errors import (
     ContactqpError,
     OptionError,
+    ProblemError,
     SceneError,
     SolverError,
     SolverNotAvailable,
@@ -32,7 +33,10 @@ from contactqp.errors import (
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.qp import QPProblem, available_qp_solvers, qp_problem
 from contactqp.model import Layout, Model, build_model
+from contactqp.model.handover import problem_from_scene
 from contactqp.prepared import Batch, Prepared, prepare
+from contactqp.problem import Problem, load_problem, save_problem
+from contactqp.problem_result import ProblemResult
 from contactqp.report import detail_table, table
 from contactqp.result import Result
 from contactqp.scene import (
@@ -56,11 +60,11 @@ __version__ = "0.1.0"
 __all__ = [
     "CONTACT_KINDS", "FORMULATIONS", "GUARANTEE", "METHODS", "TOLERANCES", "UNIT_SYSTEMS", "Bar",
     "BarContact", "Batch", "ContactqpError", "DistributedLoad", "Layout", "Load", "LoadPath",
-    "Model", "OptionError", "Prepared", "QPProblem", "Result", "Run", "Scene", "SceneError",
-    "SolverError", "SolverNotAvailable", "Support", "Tolerances", "Units", "Wall", "Walls",
-    "__version__",
-    "available_qp_solvers", "build_model", "channel", "check", "compare", "convert_units",
-    "default_scene", "detail_table", "first_contact_factor", "flat_patch", "load_path",
-    "load_scene", "minimal", "obstacle", "penalty_sweep", "prepare", "qp_problem",
+    "Model", "OptionError", "Prepared", "Problem", "ProblemError", "ProblemResult", "QPProblem",
+    "Result", "Run", "Scene", "SceneError", "SolverError", "SolverNotAvailable", "Support",
+    "Tolerances", "Units", "Wall", "Walls", "__version__", "available_qp_solvers", "build_model",
+    "channel", "check", "compare", "convert_units", "default_scene", "detail_table",
+    "first_contact_factor", "flat_patch", "load_path", "load_problem", "load_scene", "minimal",
+    "obstacle", "penalty_sweep", "prepare", "problem_from_scene", "qp_problem", "save_problem",
     "scene_from_dict", "scene_to_toml", "solve", "table", "wall_at_every_node",
 ]

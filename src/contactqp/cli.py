@@ -23,6 +23,8 @@ from contactqp.cli_input import check_out_folder, negative_numbers_joined
 from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.lagrange import ACTIVE_SETS
+from contactqp.problem import Problem, load_problem
+from contactqp.problem_result import ProblemResult, problem_table
 from contactqp.progress import Report
 from contactqp.report import detail_table, table
 from contactqp.result import Result
@@ -57,7 +59,10 @@ def _progress(label: str) -> Report:
     return Report(f"contactqp: {label}", quiet=PROGRESS_AFTER)
 
 
-def _scene(path: str | None) -> Scene:
+def _scene(path: str | None) -> Scene | Problem:
+    """The scene file, or a user's problem: an .npz bundle or a folder of .mtx files."""
+    if path and (str(path).endswith(".npz") or Path(path).is_dir()):  # "" is no folder
+        return load_problem(path)
     return as_scene(path)
 
 
@@ -131,9 +136,13 @@ def command_solve(args: argparse.Namespace) -> int:
     result = solve(_scene(args.scene), args.method, args.contact, args.formulation, **options)
     if args.json:
         print(result.to_json())
+    elif isinstance(result, ProblemResult):
+        print(problem_table([result]) + ("\n\n" + result.summary() if args.detail else ""))
     else:
         _print_runs([Run(result.label, result.contact, result)], args.detail)
-    if getattr(args, "out", None) and _charts_wanted(args):  # solve draws only when asked
+    if isinstance(result, ProblemResult):
+        pass  # a problem has no bar to draw
+    elif getattr(args, "out", None) and _charts_wanted(args):  # solve draws only when asked
         from contactqp import plot  # matplotlib only when a chart is asked for
 
         _out(args).mkdir(parents=True, exist_ok=True)
@@ -293,7 +302,9 @@ def _scene_command(commands: Any, name: str, handler: Callable, help_text: str,
                    epilog: str | None = None) -> argparse.ArgumentParser:
     """A command that takes a scene file (optional: the default scene)."""
     sub = commands.add_parser(name, help=help_text, description=help_text, epilog=epilog)
-    sub.add_argument("scene", nargs="?", help="scene TOML file (default: the default scene)")
+    sub.add_argument("scene", nargs="?", help="scene TOML file (default: the default scene); "
+                     "solve also takes a problem: an .npz bundle or a folder of K.mtx, "
+                     "f.mtx, C.mtx, g.mtx (contactqp.save_problem)")
     sub.set_defaults(handler=handler)
     return sub
 

@@ -11,6 +11,11 @@ class SceneError(ContactqpError, ValueError):
     """A scene (or scene file) is invalid; the message names the field and the value."""
 
 
+class ProblemError(SceneError):
+    """A user's own model (:class:`contactqp.Problem`: K, f, C, g) is invalid; the message
+    names the field and the value. A SceneError, so that every handler of bad input takes it."""
+
+
 class OptionError(ContactqpError, ValueError):
     """An unknown method, contact kind or option, or an option with a bad value."""
 

@@ -65,6 +65,21 @@ def forces_summary(forces: np.ndarray, scale: float) -> str:
     return f"{top} ({int(np.count_nonzero(carrying(forces, scale)))}/{forces.size})"
 
 
+def carrying_forces(forces: np.ndarray, names: Sequence[str], scale: float,
+                    most: int = 8) -> str:
+    """The forces that carry force (:func:`carrying`), the largest first, at most ``most``
+    of them, each after its row's name; then how many carry none: 'wall[0] 175870.4536;
+    2 of 3 carry none'."""
+    shown = [i for i in np.argsort(-np.abs(forces), kind="stable") if carrying(forces[i], scale)]
+    text = ", ".join(f"{names[i]} {force(forces[i], scale)}" for i in shown[:most])
+    if len(shown) > most:
+        text += f", … ({len(shown) - most} more)"
+    rest = forces.size - len(shown)
+    if rest:
+        text += f"{'; ' if shown else ''}{rest} of {forces.size} carry none"
+    return text
+
+
 def text_table(header: Sequence[tuple[str, str]], rows: Sequence[Sequence[str]]) -> str:
     """Columns padded to their widest cell, two spaces apart, under a two-line header (each
     column's name, then its unit or ''), and a rule."""

@@ -147,17 +147,8 @@ class Result:
     def _forces(self, most: int = 8) -> str:
         """The contact forces that carry force (more than 1e-5·F), the largest first, at most
         ``most`` of them."""
-        names = formatting.row_names(self.scene)
-        forces, scale = self.contact_force, self.force_scale
-        shown = [i for i in np.argsort(-np.abs(forces), kind="stable")
-                 if formatting.carrying(forces[i], scale)]
-        text = ", ".join(f"{names[i]} {formatting.force(forces[i], scale)}" for i in shown[:most])
-        if len(shown) > most:
-            text += f", … ({len(shown) - most} more)"
-        rest = forces.size - len(shown)
-        if rest:
-            text += f"{'; ' if shown else ''}{rest} of {forces.size} carry none"
-        return text
+        return formatting.carrying_forces(self.contact_force, formatting.row_names(self.scene),
+                                          self.force_scale, most)
 
     def _penetration(self) -> str:
         i = int(np.argmax(self.penetration))

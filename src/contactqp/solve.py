@@ -17,6 +17,9 @@ from contactqp.errors import OptionError, SceneError
 from contactqp.feasibility import equality_conflict, unheld_bars
 from contactqp.methods import Method, checked_options, hull
 from contactqp.model import Condensed, Model, build_model, condense
+from contactqp.problem import Problem
+from contactqp.problem_result import ProblemResult
+from contactqp.problem_solve import solve_problem
 from contactqp.result import Result, Solution, make_result
 from contactqp.scene import Scene
 from contactqp.scene_io import load_scene
@@ -38,15 +41,20 @@ AUTO_CONDENSE = 16  # formulation="auto" condenses a scene with at most this man
 AUTO_CONDENSE_NODES = 512  # ... and at least this many free nodes (below, condensing costs more)
 
 
-def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrange",
-          contact: str = "inequality", formulation: str = "auto", **options: Any) -> Result:
-    """Solve a scene by one method and return the checked Result.
+def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str = "lagrange",
+          contact: str = "inequality", formulation: str = "auto",
+          **options: Any) -> Result | ProblemResult:
+    """Solve a scene (or a user's own model) by one method and return the checked Result.
 
     Parameters
     ----------
-    scene : Scene, str, os.PathLike or None
+    scene : Scene, Problem, str, os.PathLike or None
         The scene, the path of a scene file (read by :func:`contactqp.load_scene`), or None
-        for the default scene (:func:`contactqp.default_scene`).
+        for the default scene (:func:`contactqp.default_scene`); or a
+        :class:`contactqp.Problem` (K, f, C, g), solved by
+        :func:`contactqp.problem_solve.solve_problem` into a
+        :class:`~contactqp.problem_result.ProblemResult` (every method but nitsche; the
+        formulation stays "auto").
     method : str
         One of :data:`contactqp.METHODS`: "lagrange", "penalty", "augmented", "qp", "lemke",
         "pgs", "semismooth_newton" or "nitsche".
@@ -99,6 +107,11 @@ def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrang
     SolverError
         The method could not produce an answer (a singular system, a loop that does not end).
     """
+    if isinstance(scene, Problem):
+        if formulation != "auto":
+            raise OptionError(f"formulation={formulation!r} applies to bar scenes; a Problem "
+                              "is solved as given (formulation='auto')")
+        return solve_problem(scene, method, contact, **options)
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
     start = time.perf_counter()
     model = build_model(scene)

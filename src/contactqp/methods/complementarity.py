@@ -35,6 +35,7 @@ from contactqp.check import natural_map
 from contactqp.errors import SolverError
 from contactqp.methods.lemke import lemke, unit_diagonal
 from contactqp.model import Condensed, Model, without_circulation
+from contactqp.model.sparse import SparseModel
 from contactqp.result import Solution
 
 LCP_ROWS = 2000  # contact rows up to which the LCP is formed (W dense, rows x rows)
@@ -84,7 +85,8 @@ def _answer(problem: Model | Condensed, contact: str, solver: str, z_solver) -> 
     M, q_scaled, D = unit_diagonal(W, q)
     z, iterations, converged, status, info = z_solver(M, q_scaled)
     residual = natural_map(z, M @ z + q_scaled, q_scaled)
-    lam = without_circulation(problem, D * z)
+    # a user's problem has no chain whose loops of rows could carry a force round
+    lam = D * z if isinstance(problem, SparseModel) else without_circulation(problem, D * z)
     return Solution(u_free - columns @ lam, lam, solver=solver, iterations=iterations,
                     status=status, claimed_success=converged,
                     info={**info, "natural_map": residual})

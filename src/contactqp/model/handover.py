@@ -1,0 +1,55 @@
+"""A bar scene handed over as a user's problem: the chain's K, f, C, g over every node, the
+supports as prescribed dofs (held at 0). Solving it as a :class:`~contactqp.Problem` gives the
+scene's answer (tests/test_handover.py): the two front ends meet in the same methods."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from contactqp.model.layout import Layout
+from contactqp.problem import Problem
+from contactqp.scene import Scene, row_names
+
+
+def problem_from_scene(scene: Scene | Layout) -> Problem:
+    """A bar scene as a :class:`~contactqp.Problem`: K over every node (the element
+    stiffnesses along the chain), f (the nodal loads, distributed loads lumped as the chain
+    lumps them), C and g (a wall's ±1, a bar contact's +1 at node a and −1 at node b; an end
+    at a support contributes nothing, as in the chain model), the supports as prescribed dofs
+    at 0, the rows named as the scene names them.
+
+    Parameters
+    ----------
+    scene : Scene or Layout
+        The scene (or its layout).
+
+    Returns
+    -------
+    Problem
+        Its K, f, C, g; ``contactqp.solve(problem)`` gives the scene's answer (a bar held
+        by contact alone gives a singular K, which only the QP methods take).
+
+    Raises
+    ------
+    ProblemError
+        Two rows of the scene that are the same constraint (two walls on one side of a node
+        with the same gap).
+    """
+    layout = scene if isinstance(scene, Layout) else scene.layout
+    scene = layout.scene
+    n, k = layout.n_nodes, layout.link_stiffness  # k: 0 between bars
+    diagonal = np.zeros(n)
+    diagonal[:-1] += k
+    diagonal[1:] += k
+    K = sp.csr_array(sp.diags_array([-k, diagonal, -k], offsets=[-1, 0, 1]))
+    rows = layout.rows
+    keep = ~layout.support_mask[rows.node]
+    C = sp.csr_array((rows.coefficient[keep], (rows.row[keep], rows.node[keep])),
+                     shape=(rows.gap.size, n))
+    return Problem(K, np.asarray(layout.nodal_loads, dtype=float), C, rows.gap,
+                   prescribed=np.sort(layout.support_nodes), names=row_names(scene),
+                   units=scene.units, name=scene.name)
+
+
+__all__ = ["problem_from_scene"]

@@ -1,0 +1,351 @@
+"""A user's problem → the sparse model: the prescribed dofs condensed out, K factorised once.
+
+The methods and the check call the same few operations the chain model offers: solve with K
+(:meth:`SparseModel.solve_K`), the flexibility W = C_A K⁻¹ C_Aᵀ of the rows that need it
+(:meth:`SparseModel.flexibility`, from sparse forward solves kept once computed), K, P, C, g,
+and the scales F and U.
+
+Condensing (scikit-fem's ``condense``): with I the free dofs and D the prescribed ones, the
+unknowns are u_I, K_II u_I = f_I − K_ID u_D − C_Iᵀλ; C has no entry on D (the problem checks
+it), so the contact rows are C_I.
+
+The factorisation is SuperLU's (``scipy.sparse.linalg.splu``) with the minimum-degree ordering
+of Kᵀ + K and no pivoting off the diagonal (K is symmetric positive definite): measured on a
+2D grid of 8.4·10⁴ dofs (benchmarks/problem.py) it fills in less than COLAMD and factors
+faster. A pivot below :data:`SINGULAR_PIVOT` of the largest diagonal marks K singular: then
+the modes K leaves free are worked out, and one that no contact row holds is an error naming
+it ("nothing holds the model along ...").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import scipy.sparse as sp
+
+if TYPE_CHECKING:  # scipy.linalg and scipy.sparse.linalg load at the first solve (start-up)
+    import scipy.sparse.linalg as spla
+
+from contactqp.errors import ProblemError, SolverError
+from contactqp.problem import Problem
+
+ORDERING = "MMD_AT_PLUS_A"  # SuperLU's fill-reducing ordering for symmetric K
+EINSUM_WORK = 10**8  # multiply-adds up to which W is formed by einsum rather than BLAS
+DENSE_REACH = 4000  # the forward solves go dense up to this many rows of L reached
+SINGULAR_PIVOT = 1e-11  # a pivot below this times the largest diagonal of K: K is singular
+HELD = 1e-8  # a mode x with ‖C x‖ below this × ‖C‖‖x‖ is held by no contact row
+
+
+def factorise(K: sp.spmatrix, ordering: str = ORDERING) -> spla.SuperLU:
+    """SuperLU of a symmetric positive (semi)definite K: ``ordering`` of the columns, the
+    diagonal pivots kept (symmetric mode), so the factors have the symmetric fill."""
+    import scipy.sparse.linalg as spla
+
+    options = {"SymmetricMode": True} if ordering == ORDERING else {}
+    return spla.splu(sp.csc_matrix(K), permc_spec=ordering,
+                     diag_pivot_thresh=0.0 if ordering == ORDERING else 1.0, options=options)
+
+
+@dataclass(eq=False)
+class ColumnCache:
+    """Z_i = U⁻ᵀ Pr c_i for the rows asked for so far, dense on the rows they reach
+    (``support``, increasing; ``values``: support x rows, in the order computed):
+    W = C K⁻¹ Cᵀ = Zᵀ D Z (:meth:`SparseModel.flexibility`)."""
+
+    pivots: np.ndarray | None = None  # D, the diagonal of U (U = D Lᵀ, K symmetric)
+    where: dict[int, int] = field(default_factory=dict)
+    support: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
+    values: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    parent: np.ndarray | None = None  # the elimination tree of L
+    lower: sp.csr_matrix | None = None  # Uᵀ (SuperLU builds a new copy at each .U)
+    solves: int = 0  # columns computed
+    solver: tuple[bytes, Any, bool] | None = None  # (rows, W_AA's solver, singular) of the
+    # last set solved
+
+    def add(self, rows: list[int], nodes: np.ndarray, y: np.ndarray) -> None:
+        """Keep the columns y (on ``nodes``) of ``rows``."""
+        support = np.union1d(self.support, nodes)
+        values = np.zeros((support.size, self.values.shape[1] + len(rows)))
+        values[np.searchsorted(support, self.support), : self.values.shape[1]] = self.values
+        values[np.searchsorted(support, nodes), self.values.shape[1]:] = y
+        start = len(self.where)
+        self.where.update({row: start + k for k, row in enumerate(rows)})
+        self.support, self.values, self.solves = support, values, self.solves + len(rows)
+
+
+@dataclass(frozen=True, eq=False)
+class SparseModel:
+    """The condensed problem and its factorisation (module docstring).
+
+    Attributes
+    ----------
+    problem : the user's Problem.
+    free : the free dofs (indices into the problem's u).
+    K, P, C, g : K_II, f_I − K_ID u_D, C_I and g: the problem in the free dofs.
+    factor : SuperLU of K (None where K is singular: :attr:`floating`).
+    floating : the modes K leaves free, which contact rows hold (free dofs x modes, or None).
+    """
+
+    problem: Problem
+    free: np.ndarray
+    K: sp.csc_matrix
+    P: np.ndarray
+    C: sp.csr_array
+    g: np.ndarray
+    factor: spla.SuperLU | None
+    floating: np.ndarray | None = None
+    cache: ColumnCache = field(default_factory=ColumnCache)
+
+    @property
+    def n_free(self) -> int:
+        return int(self.P.size)
+
+    @property
+    def n_contacts(self) -> int:
+        return int(self.g.size)
+
+    @property
+    def equality(self) -> np.ndarray:
+        return self.problem.equality
+
+    def solve_K(self, rhs: np.ndarray) -> np.ndarray:
+        """K⁻¹ rhs (one column or several) with the factorisation."""
+        if self.factor is None:
+            raise SolverError("K is singular (a mode only contact rows hold): this method "
+                              "needs K⁻¹; use lagrange or qp")
+        rhs = np.asarray(rhs, dtype=float)
+        if self.n_free == 0:  # every dof prescribed: nothing to solve
+            return rhs.copy()
+        if rhs.ndim == 1:
+            return self.factor.solve(rhs)
+        # one column at a time: SuperLU's multi-column solve costs more than the columns
+        # alone (measured at 8.4·10⁴ dofs: 10 columns 150 ms at once, 12 ms each alone)
+        return np.column_stack([self.factor.solve(rhs[:, k]) for k in range(rhs.shape[1])]
+                               ) if rhs.shape[1] else np.zeros(rhs.shape)
+
+    def flexibility(self, rows: np.ndarray) -> np.ndarray:
+        """W = C_rows K⁻¹ C_rowsᵀ (rows x rows, dense). SuperLU gives Pr K Prᵀ = L U with the
+        diagonal pivots kept, and K symmetric makes U = D Lᵀ (D = diag U), so K⁻¹ =
+        Prᵀ U⁻¹ D U⁻ᵀ Pr and W = Zᵀ D Z with Z = U⁻ᵀ Pr Cᵀ: one sparse forward solve per row
+        (:func:`forward_columns`), computed once."""
+        cache, rows = self.cache, np.asarray(rows, dtype=np.intp)
+        new = [int(i) for i in dict.fromkeys(rows.tolist()) if int(i) not in cache.where]
+        if new:
+            if self.factor is None:
+                self.solve_K(np.zeros(self.n_free))  # the SolverError that says why
+            if cache.parent is None:
+                cache.parent = elimination_tree(cache.lower)
+            cache.add(new, *forward_columns(self.factor.perm_r, cache.lower, cache.parent,
+                                            self.C[new]))
+        if not rows.size:
+            return np.zeros((0, 0))
+        Y = cache.values[:, [cache.where[int(i)] for i in rows]]
+        W = _gram(Y, Y * cache.pivots[cache.support, None])
+        return 0.5 * (W + W.T)
+
+    @cached_property
+    def free_displacement(self) -> np.ndarray:
+        """K⁻¹P: the free dofs' displacement with no contact force."""
+        return self.solve_K(self.P)
+
+    @cached_property
+    def row_stiffness(self) -> np.ndarray:
+        """Per row, cᵀK c / (cᵀc)²: at least the stiffness 1 / cᵀK⁻¹c the row sees (Cauchy–
+        Schwarz), without a solve; a penetration times it is at least the force that
+        closes it, so the residuals that use it never understate."""
+        C = self.C
+        squared = np.asarray(C.multiply(C).sum(axis=1)).reshape(-1)
+        energy = np.asarray((C @ self.K).multiply(C).sum(axis=1)).reshape(-1)
+        return energy / squared**2
+
+    @cached_property
+    def force_scale(self) -> float:
+        """F: the largest load, the largest force the prescribed motions bring, or (with
+        neither) the largest press fit times the stiffness its row sees."""
+        problem = self.problem
+        moved = self.P - problem.f[self.free]
+        press = float(np.max(np.maximum(-self.g, 0.0) * self.row_stiffness, initial=0.0))
+        F = max(float(np.abs(problem.f).max(initial=0.0)), float(np.abs(moved).max(initial=0.0)),
+                press)
+        return F if F > 0.0 else 1.0
+
+    @cached_property
+    def displacement_scale(self) -> float:
+        """U: the largest displacement the loads and prescribed motions cause with no contact
+        (K⁻¹f), the largest prescribed motion, or the deepest press fit (open gaps are not a
+        scale: a far row would make every penetration look small)."""
+        free = (np.abs(self.free_displacement).max(initial=0.0) if self.factor is not None
+                else 0.0)
+        U = max(float(free), float(np.abs(self.problem.prescribed_values).max(initial=0.0)),
+                float(np.max(np.maximum(-self.g, 0.0), initial=0.0)))
+        return U if U > 0.0 else float(np.abs(self.g).max(initial=1.0)) or 1.0
+
+    def full_displacements(self, u_free: np.ndarray) -> np.ndarray:
+        """Every dof's displacement: u_free on the free dofs, the prescribed values on the
+        others."""
+        problem = self.problem
+        u = np.empty(problem.n)
+        u[self.free] = u_free
+        u[problem.prescribed] = problem.prescribed_values
+        return u
+
+    def reactions(self, u: np.ndarray) -> np.ndarray:
+        """The force each prescribed dof's support applies: (K u − f) there (no contact row
+        acts on a prescribed dof)."""
+        problem = self.problem
+        if not problem.prescribed.size:
+            return np.zeros(0)
+        K_D = problem.K[problem.prescribed]
+        return K_D @ u - problem.f[problem.prescribed]
+
+
+def _gram(Y: np.ndarray, Z: np.ndarray) -> np.ndarray:
+    """Yᵀ Z for the flexibility: sparse where Y is (rows that reach few dofs, e.g. a row on
+    every dof of a diagonal K), by einsum's own loops while small (OpenBLAS threads on a busy
+    machine took 0.11 s for 80 rows x 2·10³ dofs, einsum 3 ms), else by BLAS."""
+    if np.count_nonzero(Y) < 0.1 * Y.size:
+        return (sp.csc_array(Y).T @ sp.csc_array(Z)).toarray()
+    if Y.shape[1] ** 2 * Y.shape[0] <= EINSUM_WORK:
+        return np.einsum("ik,il->kl", Y, Z, optimize=False)
+    return Y.T @ Z
+
+
+def elimination_tree(L: sp.spmatrix) -> np.ndarray:
+    """parent[j]: the first row below the diagonal in column j of L (−1 for a root)."""
+    L = sp.csc_matrix(L)
+    L.sort_indices()
+    counts = np.diff(L.indptr)
+    parent = np.full(L.shape[0], -1)
+    has = counts > 1
+    parent[has] = L.indices[L.indptr[:-1][has] + 1]
+    return parent
+
+
+def reach(parent: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """Every node on the elimination-tree paths from ``starts`` to the roots, increasing: where
+    L⁻¹b is not zero for b nonzero at ``starts``."""
+    seen = np.zeros(parent.size, dtype=bool)
+    for node in starts.tolist():
+        while node >= 0 and not seen[node]:
+            seen[node] = True
+            node = parent[node]
+    return np.flatnonzero(seen)
+
+
+def forward_columns(perm_r: np.ndarray, lower: sp.csr_matrix, parent: np.ndarray,
+                    rows: sp.csr_array) -> tuple[np.ndarray, np.ndarray]:
+    """(the rows reached, Z there): Z = lower⁻¹ Pr Cᵀ for some rows of C (``lower`` = Uᵀ),
+    solved on the rows it reaches alone. A contact row's column is zero off its
+    elimination-tree path: 80 rows of the benchmark grid reach 2·10³ of its 8.4·10⁴ dofs
+    together, so this costs a fraction of one solve with K (dense up to DENSE_REACH rows)."""
+    b = sp.csc_array(rows.T)
+    permuted = perm_r[b.indices]  # Pr: row i of b goes to perm_r[i]
+    nodes = reach(parent, np.unique(permuted))
+    local = np.full(parent.size, -1)
+    local[nodes] = np.arange(nodes.size)
+    rhs = np.zeros((nodes.size, b.shape[1]))
+    columns = np.repeat(np.arange(b.shape[1]), np.diff(b.indptr))
+    rhs[local[permuted], columns] = b.data
+    sub = sp.csr_matrix(lower[nodes][:, nodes])
+    import scipy.linalg
+    import scipy.sparse.linalg as spla
+
+    if nodes.size <= DENSE_REACH:
+        z = scipy.linalg.solve_triangular(sub.toarray(), rhs, lower=True, check_finite=False)
+    else:
+        z = spla.spsolve_triangular(sub, rhs, lower=True)
+    z = np.asarray(z).reshape(nodes.size, b.shape[1])
+    # the columns decay along the path into subnormal numbers, on which every later product
+    # runs many times slower; they are below any force
+    z[np.abs(z) < np.finfo(float).tiny] = 0.0
+    return nodes, z
+
+
+def diagonal_pivots(U: sp.csc_matrix) -> np.ndarray:
+    """The diagonal of SuperLU's U, read from its index arrays (scipy's .diagonal() of the
+    2.3·10⁶ entries of the benchmark's U took 0.46 s)."""
+    columns = np.repeat(np.arange(U.shape[1]), np.diff(U.indptr))
+    on = U.indices == columns
+    pivots = np.zeros(U.shape[0])
+    pivots[columns[on]] = U.data[on]  # one diagonal entry per column
+    return pivots
+
+
+def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseModel:
+    """Condense the prescribed dofs out and factorise K_II once (module docstring); a
+    ProblemError where nothing holds the model along a mode K leaves free."""
+    n = problem.n
+    held = np.zeros(n, dtype=bool)
+    held[problem.prescribed] = True
+    free = np.flatnonzero(~held)
+    K = problem.K
+    K_II = sp.csc_matrix(K[free][:, free])
+    P = problem.f[free] - (K[free][:, problem.prescribed] @ problem.prescribed_values
+                           if problem.prescribed.size else 0.0)
+    C = sp.csr_array(problem.C[:, free])
+    factor, cache = _factor_or_none(K_II, ordering)
+    floating = None
+    if factor is None:
+        floating = free_modes(K_II)
+        _held_by_contact(problem, free, C, floating)
+    return SparseModel(problem, free, K_II, P, C, problem.g, factor, floating, cache)
+
+
+def _factor_or_none(K: sp.csc_matrix, ordering: str
+                    ) -> tuple[spla.SuperLU | None, ColumnCache]:
+    """(the factorisation, a cache holding its pivots and Uᵀ), or (None, an empty cache)
+    where a pivot says K is singular. U is read once (scipy copies it out at each .U)."""
+    if K.shape[0] == 0:
+        K = sp.eye(1, format="csc")
+    try:
+        factor = factorise(K, ordering)
+    except RuntimeError:  # "Factor is exactly singular"
+        return None, ColumnCache()
+    U = factor.U
+    pivots = diagonal_pivots(U)
+    if np.abs(pivots).min() <= SINGULAR_PIVOT * float(np.abs(K.diagonal()).max()):
+        return None, ColumnCache()
+    # Uᵀ: lower triangular with L's structure (K symmetric), for the forward solves
+    return factor, ColumnCache(pivots=pivots, lower=sp.csr_matrix(U.T))
+
+
+def free_modes(K: sp.csc_matrix) -> np.ndarray:
+    """An orthonormal basis of the modes K leaves free (K x ≈ 0), by inverse iteration on K
+    shifted by 1e-10 of its largest diagonal (columns: modes)."""
+    n = K.shape[0]
+    shift = 1e-10 * float(np.abs(K.diagonal()).max())
+    factor = factorise(K + shift * sp.eye(n, format="csc"))
+    import scipy.linalg
+
+    trial = np.random.default_rng(0).standard_normal((n, min(n, 8)))
+    for _ in range(3):
+        trial = scipy.linalg.qr(factor.solve(trial), mode="economic")[0]
+    energy = np.linalg.norm(K @ trial, axis=0)
+    return trial[:, energy <= 1e-6 * float(np.abs(K.diagonal()).max())]
+
+
+def _held_by_contact(problem: Problem, free: np.ndarray, C: sp.csr_array,
+                     modes: np.ndarray) -> None:
+    """A ProblemError naming a mode no contact row touches (K x = 0 and C x = 0)."""
+    if modes.shape[1] == 0:
+        return
+    touched = C @ modes
+    _, sigma, vt = np.linalg.svd(touched, full_matrices=True) if touched.size else (
+        None, np.zeros(0), np.eye(modes.shape[1]))
+    scale = max(float(abs(C).max()) if C.nnz else 1.0, 1.0)
+    count = int(np.sum(sigma > HELD * scale))
+    if count == modes.shape[1]:
+        return
+    mode = modes @ vt[count:][0]
+    mode = mode / np.abs(mode).max()
+    moving = free[np.argsort(-np.abs(mode), kind="stable")[:4]]
+    where = ", ".join(f"dof {d} ({mode[np.searchsorted(free, d)]:+.2f})" for d in moving)
+    raise ProblemError(f"nothing holds the model along a mode K leaves free and no contact row "
+                       f"touches, moving {where}: prescribe a dof or add a contact row there")
+
+
+__all__ = ["ORDERING", "SparseModel", "build_sparse_model", "diagonal_pivots",
+           "elimination_tree", "factorise", "forward_columns", "free_modes", "reach"]
