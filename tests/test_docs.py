@@ -21,7 +21,7 @@ ROOT = Path(__file__).parent.parent
 README = ROOT / "README.md"
 QUICK_START = (
     'python3 -m venv .venv && .venv/bin/pip install -q . && .venv/bin/contactqp',
-    ('python3 -m venv .venv && .venv/bin/pip install -q -e ".[test,solvers]" '
+    ('python3 -m venv .venv && .venv/bin/pip install -q -e ".[test,solvers,fem]" '
      '&& .venv/bin/python -m pytest'),
 )
 # Classes contactqp builds and hands out (solve() a Result, prepare() a Prepared, …): nobody
