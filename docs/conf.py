@@ -46,7 +46,8 @@ numpydoc_class_members_toctree = False
 numpydoc_validation_checks = {"PR01", "PR02", "RT01"}
 # The classes the library builds (a Result from solve(), a Batch from solve_many(), …) list
 # their fields under Attributes: nobody constructs them, so they take no Parameters section.
-BUILT_BY_THE_LIBRARY = ("Result", "Batch", "Prepared", "Run", "LoadPath", "Model", "QPProblem")
+BUILT_BY_THE_LIBRARY = ("Result", "Batch", "Prepared", "Run", "LoadPath", "Model", "QPProblem",
+                        "ProblemResult")
 numpydoc_validation_exclude = {r"^contactqp\.[^.]+\.", r"\.__init__$",
                                *(rf"^contactqp\.{name}$" for name in BUILT_BY_THE_LIBRARY)}
 
