@@ -13,6 +13,7 @@ import statistics
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import contactqp
@@ -369,3 +370,28 @@ def test_the_benchmark_tables_are_those_of_its_data():
     listed = Counter((r[0].removeprefix("| "), r[1], r[2]) for r in rows)
     assert listed == Counter((r["case"], r["label"], r["outcome"]) for r in matrix_run()["runs"]
                              if r["outcome"] != "verified")
+
+
+def python_blocks(page: Path) -> list[str]:
+    """The ```python blocks of a Markdown page, in order."""
+    return re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"), re.DOTALL)
+
+
+def test_the_own_model_page_runs_as_it_reads(capsys):
+    """docs/howto/own_model.md: the arrays example gives the hand calculation (the tip moves
+    4 free, the wall 0.5 beyond it takes 1 − 0.5/4 = 0.875), and the scikit-fem example is
+    verified, the force through the floor balanced by the top's reactions."""
+    blocks = python_blocks(ROOT / "docs" / "howto" / "own_model.md")
+    arrays = {}
+    exec(blocks[0], arrays)  # noqa: S102 - the page's own code
+    assert arrays["result"].contact_force == pytest.approx([0.875], rel=1e-12)
+    fem_block = next(block for block in blocks if "import skfem" in block)
+    pytest.importorskip("skfem", reason='the page\'s scikit-fem example: pip install "contactqp[fem]"')
+    fem = {}
+    exec(fem_block, fem)  # noqa: S102
+    result, problem = fem["result"], fem["problem"]
+    assert result.verified, result.message
+    top = fem["top"].nodal["u^2"]
+    pushed = result.reactions[np.isin(problem.prescribed, top)].sum()
+    assert abs(pushed) == pytest.approx(result.contact_force.sum(), rel=1e-9)
+    capsys.readouterr()
