@@ -54,17 +54,21 @@ class WallsOnChain:
         self.bar_start = np.zeros(n, dtype=bool)
         self.bar_start[offsets[:-1]] = True
         self.support = layout.support_mask
-        self.u_free = load_factor * model.full_displacements(model.free_displacement)
+        # scaled only when a condensed model scales its loads (a copy of each otherwise)
+        scaled = (lambda a: a) if load_factor == 1.0 else (lambda a: load_factor * a)
+        self.u_free = scaled(model.full_displacements(model.free_displacement))
         self.link_compliance = layout.link_compliance  # 1/k per link, inf across a junction
         # per side: the wall's gap and its row at each node (Layout.walls_by_side)
         self.bound = {side: bound for side, (bound, _) in layout.walls_by_side.items()}
         self.owner = {side: owner for side, (_, owner) in layout.walls_by_side.items()}
         self.n = n
         self.n_rows = model.n_contacts
-        P = load_factor * layout.nodal_loads
+        P = scaled(layout.nodal_loads)
         self.loads = P
-        self.running_load = load_factor * layout.running_load  # S_j = Σ_(i<=j) P_i
-        self.compliance_load = load_factor * layout.compliance_load  # c_j S_j per link
+        self.running_load = scaled(layout.running_load)  # S_j = Σ_(i<=j) P_i
+        self.compliance_load = scaled(layout.compliance_load)  # c_j S_j per link
+        # the sides that have walls: a side without one is never passed
+        self.sides = tuple(side for side in (1, -1) if (self.owner[side] >= 0).any())
         self.bar_first, self.bar_last = layout.bar_ends  # each node's bar's first and last
         self.force_tolerance_base = float(np.abs(P).max(initial=0.0))
         stiffness = float(model.band[0].max()) if model.band.size else 1.0
@@ -72,18 +76,21 @@ class WallsOnChain:
                                       float(np.abs(P).max(initial=0.0)) / stiffness)
 
     def statics(self, held: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray,
-                                                           np.ndarray]:
+                                                           np.ndarray, np.ndarray]:
         """u with the walls ``held`` (side -> mask) at their gaps; returns (u, held node
-        numbers in order, the force of each held node's wall (N, >= 0 when it pushes))."""
+        numbers in order, the force of each held node's wall (N, >= 0 when it pushes), the
+        mask of the held nodes and supports)."""
         pinned = self.support | held[1] | held[-1]
         nodes = np.flatnonzero(pinned)
-        target = np.where(held[1], self.bound[1], np.where(held[-1], -self.bound[-1], 0.0))
-        w_held = self.u_free[nodes] - target[nodes]
+        plus, minus = held[1][nodes], held[-1][nodes]  # the held nodes' walls, not the chain's
+        target = np.where(plus, self.bound[1][nodes],
+                          np.where(minus, -self.bound[-1][nodes], 0.0))
+        w_held = self.u_free[nodes] - target
         bar = self.bar[nodes]
         first, last = run_starts(bar), run_ends(bar)  # each bar's first and last held node
         w = spread(self.model.layout, nodes, w_held)
         u = self.u_free - w
-        u[nodes] = target[nodes]  # exactly, not u_free − (u_free − target)
+        u[nodes] = target  # exactly, not u_free − (u_free − target)
         # the forces by statics from the loads, never from differences of displacements
         # (a wall in a patch carries its node's load, q·h, while the displacements and the
         # element forces beside it are 10⁶ times larger; measured: slopes of w left 8e-5 of
@@ -96,7 +103,7 @@ class WallsOnChain:
         sum_cS = np.add.reduceat(self.compliance_load, nodes)[:-1]
         a, b = nodes[:-1], nodes[1:]
         with np.errstate(divide="ignore", invalid="ignore"):
-            N_a = (target[b] - target[a] + sum_cS - S[a] * sum_c) / sum_c
+            N_a = (target[1:] - target[:-1] + sum_cS - S[a] * sum_c) / sum_c
         # the element forces just right and just left of every held node
         right = np.append(N_a, 0.0)
         left = np.concatenate(([0.0], N_a - (S[b - 1] - S[a])))
@@ -105,8 +112,8 @@ class WallsOnChain:
         right[last] = tail  # the loads beyond the node
         reaction = left - right - self.loads[nodes]
         # a + wall pushes in -x (its force is −R), a - wall in +x
-        force = np.where(held[1][nodes], -reaction, reaction)
-        return u, nodes, force
+        force = np.where(plus, -reaction, reaction)
+        return u, nodes, force, pinned
 
     def head_load(self, nodes: np.ndarray) -> np.ndarray:
         """The force in the element just left of each of ``nodes``, the first held node of its
@@ -202,26 +209,25 @@ def solve_hull(model: Model, *, max_iterations: int | None = None, load_factor: 
     limit = default_max_iterations(chain.n_rows) if max_iterations is None else max_iterations
     seen: set[bytes] = set()
     for step in range(1, limit + 1):
-        u, nodes, force = chain.statics(held)
+        u, nodes, force, pinned = chain.statics(held)
         scale = max(chain.force_tolerance_base, float(np.abs(force).max(initial=0.0)))
         force_tol = DECISION_RTOL * scale
         disp_tol = DECISION_RTOL * max(float(np.abs(u).max(initial=0.0)),
                                        chain.displacement_floor)
         pulling = nodes[(force < -force_tol) & ~chain.support[nodes]]  # a support may pull
-        pinned = chain.support | held[1] | held[-1]
         passed = {side: ~pinned & (chain.bound[side] - side * u < -disp_tol)
-                  for side in (1, -1)}
-        if not pulling.size and not passed[1].any() and not passed[-1].any():
+                  for side in chain.sides}
+        if not pulling.size and not any(p.any() for p in passed.values()):
             return _solution(chain, u, nodes, force, held, step), np.zeros(0)
-        key = held[1].tobytes() + held[-1].tobytes()
+        key = np.packbits(held[1]).tobytes() + np.packbits(held[-1]).tobytes()
         if key in seen:
             break
         seen.add(key)
         for side in (1, -1):
             held[side][pulling] = False
-        for side in (1, -1):
-            if passed[side].any():
-                held[side] |= chain.add_hull_walls(side, u, pinned, passed[side], disp_tol)
+        for side, stretch in passed.items():
+            if stretch.any():
+                held[side] |= chain.add_hull_walls(side, u, pinned, stretch, disp_tol)
         held[-1] &= ~held[1]
     active = np.zeros(chain.n_rows, dtype=bool)
     for side in (1, -1):
