@@ -168,10 +168,7 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
     (a free end on the left); 0: both ends held (the first and last points, at 0)."""
     if x.size < 2:
         return np.zeros(x.size, dtype=np.intp)
-    dx = np.diff(x)
-    from scipy.optimize import isotonic_regression  # here: scipy.optimize takes 0.2 s to import
-
-    slope = isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
+    slope = minorant_slopes(x, y)
     if clip < 0:
         slope = np.minimum(slope, 0.0)
     elif clip > 0:
@@ -182,6 +179,48 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
     if clip < 0 and slope[-1] < 0.0:  # the minorant falls to the last point: its lowest
         vertices = np.append(vertices, x.size - 1)
     return vertices
+
+
+HULL_LEVELS = 64  # levels of minorant_slopes before it hands the points to scipy
+
+
+def minorant_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The slope of the greatest convex minorant of the points (x, y) (x increasing) over
+    each step of x: the weighted isotonic regression of the steps' slopes (weights the steps
+    of x) that scipy.optimize.isotonic_regression gives, found as the lower hull instead, by
+    quickhull with every segment split at once: each level keeps the points below their
+    segment's chord and makes the lowest of them a vertex. A smooth stretch takes about
+    log2(points) levels; past HULL_LEVELS scipy's pooling finishes (importing scipy.optimize
+    takes 0.2-0.3 s, on the first solve of every process that meets a passed wall; pooling
+    in numpy pass by pass took 5000-8000 passes on the channel and the flat patch)."""
+    n = x.size
+    vertex = np.zeros(n, dtype=bool)
+    vertex[[0, -1]] = True
+    points = np.arange(1, n - 1)
+    left, right = np.zeros(points.size, dtype=np.intp), np.full(points.size, n - 1)
+    for _ in range(HULL_LEVELS):
+        # how far below the chord of its segment each point lies (> 0: below)
+        depth = ((y[left] - y[points]) * (x[right] - x[left])
+                 + (y[right] - y[left]) * (x[points] - x[left]))
+        below = depth > 0.0
+        points, left, right, depth = points[below], left[below], right[below], depth[below]
+        if points.size == 0:
+            corners = np.flatnonzero(vertex)
+            return np.repeat(np.diff(y[corners]) / np.diff(x[corners]), np.diff(corners))
+        first = np.flatnonzero(run_starts(left))  # the segments, in order along x
+        deepest = np.maximum.reduceat(depth, first)
+        sizes = np.diff(np.append(first, points.size))
+        lowest = np.flatnonzero(depth == np.repeat(deepest, sizes))  # the first of a tie
+        split = points[lowest[run_starts(left[lowest])]]
+        vertex[split] = True
+        at = np.repeat(split, sizes)
+        right, left = np.where(points < at, at, right), np.where(points > at, at, left)
+        keep = points != at
+        points, left, right = points[keep], left[keep], right[keep]
+    from scipy.optimize import isotonic_regression  # rare: a very lopsided hull
+
+    dx = np.diff(x)
+    return isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
 
 
 def solve_on_chain(model: Model | Condensed, contact: str, max_iterations: int | None = None
