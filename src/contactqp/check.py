@@ -229,7 +229,7 @@ def natural_map(forces: np.ndarray, gaps: np.ndarray, free: np.ndarray,
 
 def free_gaps(model: Model) -> np.ndarray:
     """q = g − C K⁻¹P: the gap of every row with no contact force (m)."""
-    return -penetration(model.layout, model.full_displacements(model.free_displacement))
+    return -penetration(model.layout, model.free_displacement_of_nodes)
 
 
 def row_compliance_roots(layout: Layout) -> np.ndarray:

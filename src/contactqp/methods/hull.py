@@ -56,7 +56,7 @@ class WallsOnChain:
         self.support = layout.support_mask
         # scaled only when a condensed model scales its loads (a copy of each otherwise)
         scaled = (lambda a: a) if load_factor == 1.0 else (lambda a: load_factor * a)
-        self.u_free = scaled(model.full_displacements(model.free_displacement))
+        self.u_free = scaled(model.free_displacement_of_nodes)
         self.link_compliance = layout.link_compliance  # 1/k per link, inf across a junction
         # per side: the wall's gap and its row at each node (Layout.walls_by_side)
         self.bound = {side: bound for side, (bound, _) in layout.walls_by_side.items()}

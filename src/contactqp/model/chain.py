@@ -146,6 +146,14 @@ class Model:
         """K⁻¹P: the displacement the loads cause with no contact at all."""
         return self.solve_K(self.P)
 
+    @cached_property
+    def free_displacement_of_nodes(self) -> np.ndarray:
+        """K⁻¹P at every node (0 at the supports), once per model: the hull starts from it
+        and the check's natural map reads the free gaps from it (read-only)."""
+        u = self.full_displacements(self.free_displacement)
+        u.flags.writeable = False
+        return u
+
     def solve_K_and_loads(self, rhs: np.ndarray) -> np.ndarray:
         """K⁻¹ rhs (columns), with K⁻¹P (:attr:`free_displacement`) from the same
         factorisation when it is not known yet."""
