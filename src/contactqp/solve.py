@@ -16,7 +16,7 @@ from contactqp.builders import default_scene
 from contactqp.errors import OptionError, SceneError
 from contactqp.feasibility import equality_conflict, unheld_bars
 from contactqp.methods import Method, checked_options, hull
-from contactqp.model import Condensed, Model, build_model, condense
+from contactqp.model import Condensed, Model, condense, scene_model
 from contactqp.result import Result, Solution, make_result
 from contactqp.scene import Scene
 from contactqp.scene_io import load_scene
@@ -101,7 +101,7 @@ def solve(scene: Scene | str | os.PathLike | None = None, method: str = "lagrang
     """
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
     start = time.perf_counter()
-    model = build_model(scene)
+    model = scene_model(scene)  # built once per scene object
     built = time.perf_counter()
     formulation = chosen_formulation(model, spec, formulation, contact)
     solution = solve_model(model, spec, contact, formulation, options)

@@ -270,6 +270,27 @@ def build_model(scene: Scene | Layout) -> Model:
     return Model(layout, free, band, P, C, rows.gap)
 
 
+def scene_model(scene: Scene) -> Model:
+    """The model of ``scene``, built once and kept with the scene's layout: a Scene does not
+    change, so every later solve, preparation or load path of the same scene object reuses
+    the model and what it has worked out since (K's solves and factor, K⁻¹P, the scales F
+    and U, the free gaps; :class:`Model`'s cached properties), and computes none of it
+    twice. Its arrays are read-only, so that no caller can change what the next one reads.
+    A scene with other values (:meth:`Scene.with_values`) has a layout of its own, and so a
+    model of its own."""
+    layout = scene.layout
+    model = layout.__dict__.get(_KEPT_MODEL)
+    if model is None:
+        model = build_model(layout)
+        for array in (model.free, model.band, model.P):
+            array.flags.writeable = False
+        layout.__dict__[_KEPT_MODEL] = model
+    return model
+
+
+_KEPT_MODEL = "_scene_model"  # where scene_model keeps a layout's model
+
+
 def free_loads(layout: Layout) -> np.ndarray:
     """P: the nodal loads on the free nodes (the supports taken out), in order."""
     return np.delete(layout.nodal_loads, layout.support_nodes)
@@ -389,5 +410,5 @@ def wall_stiffness(model: Model | Condensed) -> float | None:
 
 
 __all__ = ["Model", "build_model", "determinate_chain_solve", "displacement_scale",
-           "displacement_scale_rule", "elongation_rows", "force_scale_rule", "wall_stiffness",
+           "displacement_scale_rule", "elongation_rows", "force_scale_rule", "scene_model", "wall_stiffness",
            "without_circulation"]
