@@ -182,22 +182,44 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
 
 
 HULL_LEVELS = 64  # levels of minorant_slopes before it hands the points to scipy
+PRUNING_PASSES = 4  # passes that drop the points no corner can be, before the quickhull
 
 
 def minorant_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """The slope of the greatest convex minorant of the points (x, y) (x increasing) over
     each step of x: the weighted isotonic regression of the steps' slopes (weights the steps
-    of x) that scipy.optimize.isotonic_regression gives, found as the lower hull instead, by
-    quickhull with every segment split at once: each level keeps the points below their
-    segment's chord and makes the lowest of them a vertex. A smooth stretch takes about
-    log2(points) levels; past HULL_LEVELS scipy's pooling finishes (importing scipy.optimize
-    takes 0.2-0.3 s, on the first solve of every process that meets a passed wall; pooling
-    in numpy pass by pass took 5000-8000 passes on the channel and the flat patch)."""
-    n = x.size
-    vertex = np.zeros(n, dtype=bool)
-    vertex[[0, -1]] = True
-    points = np.arange(1, n - 1)
-    left, right = np.zeros(points.size, dtype=np.intp), np.full(points.size, n - 1)
+    of x) that scipy.optimize.isotonic_regression gives, found as the lower hull instead
+    (importing scipy.optimize takes 0.2-0.3 s, on the first solve of every process that
+    meets a passed wall). A point where the slope does not rise is no vertex of the hull, and
+    dropping all such points at once leaves the hull as it is: a few such passes leave the
+    corners of a smooth convex stretch (the flat patch) at once; what remains goes to a
+    quickhull (:func:`_lower_hull`)."""
+    corners = np.arange(x.size)
+    for _ in range(PRUNING_PASSES):
+        slope = np.diff(y[corners]) / np.diff(x[corners])
+        rises = slope[1:] > slope[:-1]
+        if rises.all():
+            return np.repeat(slope, np.diff(corners))
+        corners = corners[np.concatenate(([True], rises, [True]))]
+    corners = _lower_hull(x, y, corners)
+    if corners is None:  # rare: a very lopsided hull
+        from scipy.optimize import isotonic_regression
+
+        dx = np.diff(x)
+        return isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
+    return np.repeat(np.diff(y[corners]) / np.diff(x[corners]), np.diff(corners))
+
+
+def _lower_hull(x: np.ndarray, y: np.ndarray, candidates: np.ndarray) -> np.ndarray | None:
+    """The vertices of the lower hull of the points ``candidates`` (indices, increasing, the
+    first and the last among them), by quickhull with every segment split at once: each level
+    keeps the points below their segment's chord and makes the lowest of them a vertex. A
+    smooth stretch takes about log2(points) levels; None past HULL_LEVELS."""
+    vertex = np.zeros(x.size, dtype=bool)
+    vertex[candidates[[0, -1]]] = True
+    points = candidates[1:-1]
+    left = np.full(points.size, candidates[0])
+    right = np.full(points.size, candidates[-1])
     for _ in range(HULL_LEVELS):
         # how far below the chord of its segment each point lies (> 0: below)
         depth = ((y[left] - y[points]) * (x[right] - x[left])
@@ -205,8 +227,7 @@ def minorant_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
         below = depth > 0.0
         points, left, right, depth = points[below], left[below], right[below], depth[below]
         if points.size == 0:
-            corners = np.flatnonzero(vertex)
-            return np.repeat(np.diff(y[corners]) / np.diff(x[corners]), np.diff(corners))
+            return np.flatnonzero(vertex)
         first = np.flatnonzero(run_starts(left))  # the segments, in order along x
         deepest = np.maximum.reduceat(depth, first)
         sizes = np.diff(np.append(first, points.size))
@@ -217,10 +238,7 @@ def minorant_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
         right, left = np.where(points < at, at, right), np.where(points > at, at, left)
         keep = points != at
         points, left, right = points[keep], left[keep], right[keep]
-    from scipy.optimize import isotonic_regression  # rare: a very lopsided hull
-
-    dx = np.diff(x)
-    return isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
+    return None
 
 
 def solve_on_chain(model: Model | Condensed, contact: str, max_iterations: int | None = None
