@@ -183,6 +183,7 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
 
 HULL_LEVELS = 64  # levels of minorant_slopes before it hands the points to scipy
 PRUNING_PASSES = 4  # passes that drop the points no corner can be, before the quickhull
+MAX_JOINS = 32  # at most this many dents left: convex runs joined by tangents, else quickhull
 
 
 def minorant_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -201,13 +202,49 @@ def minorant_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
         if rises.all():
             return np.repeat(slope, np.diff(corners))
         corners = corners[np.concatenate(([True], rises, [True]))]
-    corners = _lower_hull(x, y, corners)
+    # what is left is convex but at a few points (each pass above dropped one point there):
+    # join its convex runs by their common tangents; many such points, a quickhull
+    slope = np.diff(y[corners]) / np.diff(x[corners])
+    dents = np.flatnonzero(slope[1:] <= slope[:-1]) + 1  # no corner there
+    if dents.size == 0:  # the last pass left only corners
+        return np.repeat(slope, np.diff(corners))
+    joined = _join_convex_runs(x, y, corners, dents) if dents.size <= MAX_JOINS else None
+    corners = _lower_hull(x, y, corners) if joined is None else joined
     if corners is None:  # rare: a very lopsided hull
         from scipy.optimize import isotonic_regression
 
         dx = np.diff(x)
         return isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
     return np.repeat(np.diff(y[corners]) / np.diff(x[corners]), np.diff(corners))
+
+
+def _join_convex_runs(x: np.ndarray, y: np.ndarray, corners: np.ndarray,
+                      dents: np.ndarray) -> np.ndarray | None:
+    """The lower hull of the points ``corners``, which are convex runs apart from the points
+    at the positions ``dents`` (no vertex can be there: the slope does not rise): the runs
+    joined left to right, each by the common tangent of the hull so far and the next run
+    (the tangent's ends found in turn until neither moves; collinear points between them
+    dropped). None if a tangent does not settle (the caller uses the quickhull)."""
+    bounds = np.concatenate(([0], dents, [corners.size - 1]))
+    hull = corners[: bounds[1]]
+    for a, b in zip(bounds[1:-1].tolist(), bounds[2:].tolist()):
+        run = corners[a + 1: b + 1] if b == corners.size - 1 else corners[a + 1: b]
+        if run.size == 0:  # two dents side by side
+            continue
+        i, j = hull.size - 1, 0
+        for _ in range(HULL_LEVELS):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                to_run = (y[run] - y[hull[i]]) / (x[run] - x[hull[i]])
+                j_new = run.size - 1 - int(np.argmin(to_run[::-1]))  # the last of a tie
+                from_hull = (y[run[j_new]] - y[hull]) / (x[run[j_new]] - x[hull])
+                i_new = int(np.argmax(from_hull))  # the first of a tie
+            if (i_new, j_new) == (i, j):
+                break
+            i, j = i_new, j_new
+        else:
+            return None
+        hull = np.concatenate((hull[: i + 1], run[j:]))
+    return hull
 
 
 def _lower_hull(x: np.ndarray, y: np.ndarray, candidates: np.ndarray) -> np.ndarray | None:
