@@ -172,7 +172,7 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
     starts = _run_first_elements(layout, held)
     ends = np.append(starts[1:], element.size)
     # per run: is it held at its left end, at its right end (a held node in its own bar)
-    count = np.searchsorted(held, element[starts], side="right")  # held up to its start
+    count = _count_at_or_before(layout.n_nodes, held, element[starts])  # held up to its start
     first, last = layout.element_bar_ends[0][starts], layout.element_bar_ends[1][starts]
     left_held = (count > 0) & (held[np.maximum(count - 1, 0)] >= first)
     right_held = (count < held.size) & (held[np.minimum(count, held.size - 1)] <= last)
@@ -187,7 +187,7 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
     # (past a bar's end, the cut residual there)
     start, end = layout.bar_ends[0][held], layout.bar_ends[1][held]
     at = layout.element_position[np.concatenate((held - 1, held)).clip(0, element[-1])]
-    run_of = np.searchsorted(starts, np.minimum(at, element.size - 1), side="right") - 1
+    run_of = _count_at_or_before(element.size, starts, np.minimum(at, element.size - 1)) - 1
     c_at = c_run[run_of]
     c_left = np.where(held > start, c_at[: held.size],
                       np.where(start > 0, outside[np.maximum(start - 1, 0)], 0.0))

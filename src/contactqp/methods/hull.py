@@ -182,7 +182,8 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
 
 
 HULL_LEVELS = 64  # levels of minorant_slopes before it hands the points to scipy
-PRUNING_PASSES = 4  # passes that drop the points no corner can be, before the quickhull
+PRUNING_PASSES = 1  # passes that drop the points no corner can be, before the tangents
+# (one: on the channel and the patch later passes drop one point per dent and pass)
 MAX_JOINS = 32  # at most this many dents left: convex runs joined by tangents, else quickhull
 
 
@@ -192,9 +193,9 @@ def minorant_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     of x) that scipy.optimize.isotonic_regression gives, found as the lower hull instead
     (importing scipy.optimize takes 0.2-0.3 s, on the first solve of every process that
     meets a passed wall). A point where the slope does not rise is no vertex of the hull, and
-    dropping all such points at once leaves the hull as it is: a few such passes leave the
-    corners of a smooth convex stretch (the flat patch) at once; what remains goes to a
-    quickhull (:func:`_lower_hull`)."""
+    dropping all such points at once leaves the hull as it is: one such pass leaves convex
+    runs between a few dents (the channel, the flat patch), joined by their common tangents
+    (:func:`_join_convex_runs`); many dents go to a quickhull (:func:`_lower_hull`)."""
     corners = np.arange(x.size)
     for _ in range(PRUNING_PASSES):
         slope = np.diff(y[corners]) / np.diff(x[corners])
