@@ -1,7 +1,7 @@
 """The benchmarks, one entry point: named groups of cases, each measured against a floor from
 the same run (one banded factor-and-solve of K) and, where it has one, an exact reference.
 
-    python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,loop,lcp,guarantee]
+    python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,loop,speed,lcp,guarantee]
                              [--quick] [--out DIR] [--scenes N] [--seed S]
     python benchmarks/run.py --check DIR       # is a matrix output folder complete? (CI)
 
@@ -16,6 +16,10 @@ the same run (one banded factor-and-solve of K) and, where it has one, an exact 
                (benchmarks/groups.py)
     loop       the library call in a user's loop: one solve and many load cases of the default
                scene against hand-written numpy doing the same job (benchmarks/loop.py)
+    speed      issue 28's figures in one table: solve at 10⁶ elements, 10⁵ walls warm and on
+               a first solve (also in a fresh process), the check's time over the method's,
+               the default scene, prepared.solve and solve_many against numpy; the build's,
+               the method's and the check's time apart (benchmarks/speed.py)
     lcp        the complementarity methods (lemke, pgs/psor, semismooth newton): iterations
                against the mesh and the stiffness contrast (benchmarks/lcp.py)
     guarantee  does verified mean right? every method on --scenes random scenes against the
@@ -37,8 +41,9 @@ import guarantee
 import lcp
 import loop
 import matrix
+import speed
 
-CASES = ("matrix", "taper", "walls", "contacts", "overhead", "loop", "lcp", "guarantee")
+CASES = ("matrix", "taper", "walls", "contacts", "overhead", "loop", "speed", "lcp", "guarantee")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -73,6 +78,8 @@ def main(argv: list[str] | None = None) -> int:
             contacts.main(args.quick, out / "contacts")
         elif name == "loop":
             loop.main(args.quick, out / "loop")
+        elif name == "speed":
+            speed.main(args.quick, out / "speed")
         elif name == "lcp":
             lcp.main(args.quick, out / "lcp")
         elif name == "guarantee":

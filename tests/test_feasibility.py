@@ -105,3 +105,52 @@ def test_two_zero_gap_loops_apart_are_a_scene():
     Scene((BAR, BAR), (Support(0, 0), Support(0, 1)), (),
           (Wall(1, 0.0, "-", 0), Wall(1, 0.0, "+", 1)),
           contacts=(BarContact(0, 1, 1, 1, 0.0), BarContact(0, 0, 1, 1, 1e-4)))
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_walls_alone_are_checked_as_the_constraint_graph_checks_them(seed):
+    # a scene of walls alone is checked in numpy (feasibility._two_walls_conflict); the
+    # constraint graph's edges, node by node, must find the same node and say the same
+    import numpy as np
+
+    from contactqp import Bar, Scene, Support, Wall
+    from contactqp.feasibility import constraint_graph, impossible_constraints
+
+    rng = np.random.default_rng(seed)
+    bars = (Bar.uniform(1e-4, 2e11, length=1.0, elements=6),
+            Bar.uniform(1e-4, 2e11, length=1.0, elements=4))
+    nodes = [(b, n) for b in range(2) for n in range(1, bars[b].n_nodes)]  # 0: supports
+    walls = []
+    for b, n in nodes:
+        for side in ("+", "-"):
+            if rng.random() < 0.6:
+                walls.append(Wall(n, 1.0, side, bar=b))
+    scene = Scene(bars, (Support(0, bar=0), Support(0, bar=1)), (), tuple(walls))
+    for _ in range(20):
+        gaps = np.round(rng.normal(size=len(walls)) * 1e-4, 5)
+        try:
+            scene.with_values(gaps=gaps)
+            found = ""
+        except contactqp.SceneError as error:
+            found = str(error)
+        # the graph: the first node (by its first wall) whose + and - edges sum below 0
+        sides: dict[int, dict[int, tuple[float, str]]] = {}
+        for start, end, weight, _, text in constraint_graph(_with_gaps(scene, gaps)):
+            node = end if start == -1 else start
+            sides.setdefault(node, {})[1 if start == -1 else -1] = (weight, text)
+        expected = next((f"{p[1][1]} and {p[-1][1]}" for p in sides.values()
+                         if len(p) == 2 and p[1][0] + p[-1][0] < 0.0), "")
+        assert (expected in found) if expected else found == ""
+        assert impossible_constraints(_with_gaps(scene, gaps)) == (found if expected else "")
+
+
+def _with_gaps(scene, gaps):
+    """The scene with these gaps, unchecked (as Scene.with_values makes it before its check)."""
+    import copy
+    from dataclasses import replace
+
+    made = copy.copy(scene)
+    made.__dict__.pop("layout", None)
+    object.__setattr__(made, "walls", tuple(replace(w, gap=float(g))
+                                            for w, g in zip(scene.walls, gaps)))
+    return made

@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 
 import contactqp
 from contactqp import Bar, DistributedLoad, Load, Scene, SceneError, Support, Wall
-from contactqp.methods.hull import minorant_vertices
+from contactqp.methods import hull
+from contactqp.methods.hull import minorant_slopes, minorant_vertices
 from contactqp.random_scenes import random_scene
 from contactqp.reference import reference
 
@@ -61,6 +62,53 @@ def test_minorant_vertices_are_the_convex_hull(points, clip):
             found.discard(end)
             expected.discard(end)
     assert found == expected
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(2, 400))
+def test_minorant_slopes_are_the_slopes_isotonic_regression(seed, n):
+    # scipy's pooling of adjacent violators is the independent computation: the minorant's
+    # slopes are the isotonic regression of the steps' slopes, weighted by the steps of x
+    from scipy.optimize import isotonic_regression
+
+    rng = np.random.default_rng(seed)
+    x = np.cumsum(10.0 ** rng.uniform(-3.0, 1.0, n))
+    y = rng.normal(size=n) * 10.0 ** rng.uniform(-5.0, 5.0)
+    if rng.random() < 0.5:  # a smooth bowl with noise: most points are vertices
+        y = (x - x.mean()) ** 2 + rng.normal(size=n) * 1e-2 * rng.random()
+    dx = np.diff(x)
+    expected = isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
+    found = minorant_slopes(x, y)
+    scale = np.abs(np.diff(y) / dx).max()
+    np.testing.assert_allclose(found, expected, rtol=0.0, atol=1e-12 * scale)
+    assert np.array_equal(np.flatnonzero(found[1:] != found[:-1]),
+                          np.flatnonzero(expected[1:] != expected[:-1]))
+
+
+def test_minorant_slopes_hand_a_lopsided_hull_to_scipy(monkeypatch):
+    # every point of a convex curve is a vertex and takes log2(200) ~ 8 levels; allowed 2,
+    # the scipy fallback finishes and gives the same slopes
+    x = np.linspace(0.0, 1.0, 200)
+    y = np.exp(8.0 * x)
+    full = minorant_slopes(x, y)
+    monkeypatch.setattr(hull, "HULL_LEVELS", 2)
+    monkeypatch.setattr(hull, "PRUNING_PASSES", 0)
+    np.testing.assert_allclose(minorant_slopes(x, y), full, rtol=1e-12)
+
+
+def test_a_first_solve_with_passed_walls_does_not_import_scipy_optimize():
+    # importing scipy.optimize costs 0.2-0.3 s on the first solve of a process: the hull's
+    # minorant does without it (a fresh process, as a user's script starts)
+    import subprocess
+    import sys
+
+    code = ("import sys, contactqp\nfrom contactqp.builders import channel\n"
+            "result = contactqp.solve(channel(2000))\n"
+            "assert result.verified and result.info['active_set'] == 'hull'\n"
+            "print('scipy.optimize' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "False"
 
 
 # --- random obstacles, one bar: every kind the issue names, against the exact reference

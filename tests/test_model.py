@@ -143,3 +143,33 @@ def test_distributed_load_on_part_of_a_bar_and_its_nodal_forces():
     assert result.reactions[0] == pytest.approx(-500.0)
     # N(x) = q (0.6 − x) on the loaded part; an element's k·Δu is its mean over the element
     assert result.element_force == pytest.approx([500.0, 400.0, 150.0, 0.0], abs=1e-9)
+
+
+@pytest.mark.parametrize("method", ["lagrange", "penalty", "augmented", "pgs"])
+def test_a_scene_keeps_its_model_and_a_second_solve_is_a_fresh_one_bit_for_bit(method):
+    # solve() builds a scene's model once (contactqp.model.scene_model) and a second solve
+    # reuses it and all it has worked out: the Result must be the one a copy of the scene,
+    # built from nothing, gives, to the last bit
+    from dataclasses import replace
+
+    from contactqp.model import scene_model
+    from contactqp.random_scenes import random_scene
+
+    seed = int(np.random.default_rng().integers(2**32))  # fresh scenes; seed in the message
+    rng = np.random.default_rng(seed)
+    for _ in range(15):
+        scene = random_scene(rng)
+        try:
+            first = contactqp.solve(scene, method)
+        except contactqp.SolverError:
+            continue
+        again = contactqp.solve(scene, method)
+        fresh = contactqp.solve(replace(scene), method)  # a new object: its own model
+        assert again.model is first.model is scene_model(scene)
+        assert fresh.model is not first.model
+        assert not first.model.band.flags.writeable  # nobody changes what the next reads
+        for name in ("u", "contact_force", "reactions", "penetration", "element_force"):
+            assert np.array_equal(getattr(again, name), getattr(fresh, name)), (name, seed)
+        assert again.residuals == fresh.residuals, seed
+        assert (again.verified, again.force_error_bound, again.displacement_error_bound) == (
+            fresh.verified, fresh.force_error_bound, fresh.displacement_error_bound), seed

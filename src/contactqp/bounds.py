@@ -21,7 +21,6 @@ from contactqp.model import (
     largest,
     node_set,
     penetration,
-    run_starts,
     seen_stiffness,
 )
 
@@ -167,15 +166,13 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
         return 0.0, 0.0
     if held.size == 0:  # bars with no support, and nothing in the answer holds them
         return np.inf, np.inf
-    r = (links + outside[:-1])[element]
-    position = _count_at_or_before(layout.n_nodes, held, element)  # held nodes up to the start
-    run = position if len(layout.scene.bars) == 1 else (
-        position * len(layout.scene.bars) + layout.bar_of(element))
-    starts = np.flatnonzero(run_starts(run))
-    ends = np.append(starts[1:], run.size)
-    size = ends - starts
+    r = links + outside[:-1]
+    if element.size != r.size:  # junctions between bars: not every link is an element
+        r = r[element]
+    starts = _run_first_elements(layout, held)
+    ends = np.append(starts[1:], element.size)
     # per run: is it held at its left end, at its right end (a held node in its own bar)
-    count = position[starts]
+    count = _count_at_or_before(layout.n_nodes, held, element[starts])  # held up to its start
     first, last = layout.element_bar_ends[0][starts], layout.element_bar_ends[1][starts]
     left_held = (count > 0) & (held[np.maximum(count - 1, 0)] >= first)
     right_held = (count < held.size) & (held[np.minimum(count, held.size - 1)] <= last)
@@ -185,24 +182,57 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
     after_bar = outside[last]
     before_bar = np.where(first > 0, outside[np.maximum(first - 1, 0)], 0.0)
     c_run = np.where(both, mean, np.where(left_held, after_bar, before_bar))
-    c = np.repeat(c_run, size)
-    elongation = (c - r) * compliance
-    total = np.cumsum(elongation)
-    base = np.repeat(total[starts] - elongation[starts], size)  # the sum before each run
-    from_left = total - base  # displacement of each element's end node, from the left end
-    tail_end = np.repeat(total[ends - 1], size)
-    from_right = tail_end - total + elongation  # of each element's start node, from the right
-    anchored_left = np.repeat(left_held, size)
-    sway = largest(np.where(anchored_left, from_left, from_right))
+    sway = _sway(r, compliance, c_run, starts, ends, left_held)
     # force error at each held node: the jump of c between the elements on either side of it
     # (past a bar's end, the cut residual there)
     start, end = layout.bar_ends[0][held], layout.bar_ends[1][held]
     at = layout.element_position[np.concatenate((held - 1, held)).clip(0, element[-1])]
-    c_at = c[np.minimum(at, c.size - 1)]
+    run_of = _count_at_or_before(element.size, starts, np.minimum(at, element.size - 1)) - 1
+    c_at = c_run[run_of]
     c_left = np.where(held > start, c_at[: held.size],
                       np.where(start > 0, outside[np.maximum(start - 1, 0)], 0.0))
     c_right = np.where(held < end, c_at[held.size:], outside[end])
     return largest(c_left - c_right), sway
+
+
+def _run_first_elements(layout: Layout, held: np.ndarray) -> np.ndarray:
+    """The first element (index in :attr:`Layout.elements`) of every run of elements between
+    held nodes in one bar: element 0, each bar's first and each element that starts at a held
+    node. From the held nodes alone, with no pass over the chain when they are few."""
+    n = layout.elements[0].size
+    firsts = layout.element_position[layout.node_offsets[:-1]]
+    marks = layout.element_position[held]
+    if 8 * (marks.size + firsts.size) <= n:
+        starts = np.unique(np.concatenate(([0], firsts, marks)))
+        return starts[starts < n]
+    mask = np.zeros(n + 1, dtype=bool)
+    mask[0] = True
+    mask[firsts] = True
+    mask[marks] = True
+    return np.flatnonzero(mask[:n])
+
+
+def _sway(r: np.ndarray, compliance: np.ndarray, c_run: np.ndarray, starts: np.ndarray,
+          ends: np.ndarray, anchored_left: np.ndarray) -> float:
+    """The largest displacement error (m) of :func:`propagate`: element e of a run stretches
+    by (c − r_e)/k_e too much, and the nodes move by the running sum of that from the run's
+    held end. The running sum over the chain once; per run only its largest and smallest
+    value, since |x − a| over a run is largest at one of them (x − a is monotone in x, in
+    floating point too)."""
+    c = c_run[0] if c_run.size == 1 else np.repeat(c_run, ends - starts)
+    elongation = c - r
+    elongation *= compliance
+    total = np.cumsum(elongation)
+    base = total[starts] - elongation[starts]  # the sum before each run
+    tail = total[ends - 1]  # ... and to its end
+    top, bottom = np.maximum.reduceat(total, starts), np.minimum.reduceat(total, starts)
+    # held at the left end: the nodes move by total − base; held only at the right end (a
+    # bar's free head): by tail − (the sum before each element), base included and the run's
+    # last value tail itself moving by 0
+    from_left = np.maximum(np.abs(top - base), np.abs(bottom - base))
+    from_right = np.maximum(np.maximum(np.abs(tail - top), np.abs(tail - bottom)),
+                            np.abs(tail - base))
+    return largest(np.where(anchored_left, from_left, from_right))
 
 
 def _release(layout: Layout, held: np.ndarray, pushing: np.ndarray, lam: np.ndarray,

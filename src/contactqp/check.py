@@ -52,11 +52,11 @@ from contactqp.errors import OptionError
 from contactqp.model import (
     Layout,
     Model,
-    build_model,
     element_forces,
     largest,
     link_forces,
     penetration,
+    scene_model,
 )
 from contactqp.scene import Scene, row_names
 
@@ -167,7 +167,7 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
     OptionError
         A bad contact kind, or an array of the wrong length for the model.
     """
-    model = model if isinstance(model, Model) else build_model(model)
+    model = model if isinstance(model, Model) else scene_model(model)
     layout = model.layout
     if contact not in ("inequality", "equality"):
         raise OptionError(f"contact must be inequality or equality; got {contact!r}")
@@ -227,7 +227,7 @@ def natural_map(forces: np.ndarray, gaps: np.ndarray, free: np.ndarray,
 
 def free_gaps(model: Model) -> np.ndarray:
     """q = g − C K⁻¹P: the gap of every row with no contact force (m)."""
-    return -penetration(model.layout, model.full_displacements(model.free_displacement))
+    return -penetration(model.layout, model.free_displacement_of_nodes)
 
 
 def row_compliance_roots(layout: Layout) -> np.ndarray:

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from contactqp.errors import ContactqpError, OptionError
-from contactqp.model import Model, build_model, wall_stiffness
+from contactqp.model import Model, scene_model, wall_stiffness
 from contactqp.prepared import prepare
 from contactqp.progress import Progress, as_progress
 from contactqp.result import Result, plain
@@ -52,7 +52,7 @@ def curve_methods(scene: Scene | Model) -> dict[str, tuple[str, str, dict[str, A
     """:data:`CURVE_METHODS` plus "soft penalty": ε = the stiffness the contacts see
     (:func:`contactqp.model.wall_stiffness`), so that its penetration, λ/ε, is as large as
     the displacement the contact prevents and the softer slope past the kink shows."""
-    seen = wall_stiffness(scene if isinstance(scene, Model) else build_model(scene))
+    seen = wall_stiffness(scene if isinstance(scene, Model) else scene_model(scene))
     methods = dict(CURVE_METHODS)
     if seen is not None:
         methods["soft penalty"] = ("penalty", "inequality",
@@ -131,7 +131,7 @@ def first_contact_factor(scene: Scene) -> float:
     SceneError
         A scene whose model cannot be built (see :func:`contactqp.build_model`).
     """
-    model = build_model(as_scene(scene))
+    model = scene_model(as_scene(scene))
     if model.floating:
         return 0.0
     closing = model.C @ model.free_displacement
@@ -192,7 +192,7 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
     scene = as_scene(scene)
     factors = _factors(steps, scene)
     report = as_progress(progress, "load path")
-    model = build_model(scene)
+    model = scene_model(scene)
     if model.floating:  # with no load nothing fixes where such a bar is: start one step in
         factors = np.linspace(0.0, 1.0, factors.size + 1)[1:]
     methods = curve_methods(model) if methods is None else methods

@@ -24,7 +24,7 @@ from contactqp.errors import OptionError, SceneError
 from contactqp.feasibility import equality_conflict, unheld_bars
 from contactqp.layout import TOPOLOGY
 from contactqp.methods import Method, cases, complementarity
-from contactqp.model import Model, build_model
+from contactqp.model import Model, build_model, scene_model
 from contactqp.progress import as_progress
 from contactqp.result import Result, make_result
 from contactqp.scene import MAX_ELEMENTS, Scene
@@ -214,7 +214,7 @@ def prepare(scene: Scene | str | None = None, method: str = "lagrange",
         A scene file that cannot be read or holds bad values.
     """
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
-    model = build_model(scene)
+    model = scene_model(scene)
     for name in TOPOLOGY:  # made once here, shared by every case's layout
         getattr(model.layout, name)
     return Prepared(scene, method, contact, chosen_formulation(model, spec, formulation, contact),

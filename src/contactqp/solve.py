@@ -16,7 +16,7 @@ from contactqp.builders import default_scene
 from contactqp.errors import OptionError, SceneError
 from contactqp.feasibility import equality_conflict, unheld_bars
 from contactqp.methods import Method, checked_options, hull
-from contactqp.model import Condensed, Model, build_model, condense
+from contactqp.model import Condensed, Model, condense, scene_model
 from contactqp.problem import Problem
 from contactqp.problem_result import ProblemResult
 from contactqp.problem_solve import solve_problem
@@ -114,7 +114,7 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
         return solve_problem(scene, method, contact, **options)
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
     start = time.perf_counter()
-    model = build_model(scene)
+    model = scene_model(scene)  # built once per scene object
     built = time.perf_counter()
     formulation = chosen_formulation(model, spec, formulation, contact)
     solution = solve_model(model, spec, contact, formulation, options)

@@ -54,17 +54,21 @@ class WallsOnChain:
         self.bar_start = np.zeros(n, dtype=bool)
         self.bar_start[offsets[:-1]] = True
         self.support = layout.support_mask
-        self.u_free = load_factor * model.full_displacements(model.free_displacement)
+        # scaled only when a condensed model scales its loads (a copy of each otherwise)
+        scaled = (lambda a: a) if load_factor == 1.0 else (lambda a: load_factor * a)
+        self.u_free = scaled(model.free_displacement_of_nodes)
         self.link_compliance = layout.link_compliance  # 1/k per link, inf across a junction
         # per side: the wall's gap and its row at each node (Layout.walls_by_side)
         self.bound = {side: bound for side, (bound, _) in layout.walls_by_side.items()}
         self.owner = {side: owner for side, (_, owner) in layout.walls_by_side.items()}
         self.n = n
         self.n_rows = model.n_contacts
-        P = load_factor * layout.nodal_loads
+        P = scaled(layout.nodal_loads)
         self.loads = P
-        self.running_load = load_factor * layout.running_load  # S_j = Σ_(i<=j) P_i
-        self.compliance_load = load_factor * layout.compliance_load  # c_j S_j per link
+        self.running_load = scaled(layout.running_load)  # S_j = Σ_(i<=j) P_i
+        self.compliance_load = scaled(layout.compliance_load)  # c_j S_j per link
+        # the sides that have walls: a side without one is never passed
+        self.sides = tuple(side for side in (1, -1) if (self.owner[side] >= 0).any())
         self.bar_first, self.bar_last = layout.bar_ends  # each node's bar's first and last
         self.force_tolerance_base = float(np.abs(P).max(initial=0.0))
         stiffness = float(model.band[0].max()) if model.band.size else 1.0
@@ -72,18 +76,21 @@ class WallsOnChain:
                                       float(np.abs(P).max(initial=0.0)) / stiffness)
 
     def statics(self, held: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray,
-                                                           np.ndarray]:
+                                                           np.ndarray, np.ndarray]:
         """u with the walls ``held`` (side -> mask) at their gaps; returns (u, held node
-        numbers in order, the force of each held node's wall (N, >= 0 when it pushes))."""
+        numbers in order, the force of each held node's wall (N, >= 0 when it pushes), the
+        mask of the held nodes and supports)."""
         pinned = self.support | held[1] | held[-1]
         nodes = np.flatnonzero(pinned)
-        target = np.where(held[1], self.bound[1], np.where(held[-1], -self.bound[-1], 0.0))
-        w_held = self.u_free[nodes] - target[nodes]
+        plus, minus = held[1][nodes], held[-1][nodes]  # the held nodes' walls, not the chain's
+        target = np.where(plus, self.bound[1][nodes],
+                          np.where(minus, -self.bound[-1][nodes], 0.0))
+        w_held = self.u_free[nodes] - target
         bar = self.bar[nodes]
         first, last = run_starts(bar), run_ends(bar)  # each bar's first and last held node
         w = spread(self.model.layout, nodes, w_held)
         u = self.u_free - w
-        u[nodes] = target[nodes]  # exactly, not u_free − (u_free − target)
+        u[nodes] = target  # exactly, not u_free − (u_free − target)
         # the forces by statics from the loads, never from differences of displacements
         # (a wall in a patch carries its node's load, q·h, while the displacements and the
         # element forces beside it are 10⁶ times larger; measured: slopes of w left 8e-5 of
@@ -96,7 +103,7 @@ class WallsOnChain:
         sum_cS = np.add.reduceat(self.compliance_load, nodes)[:-1]
         a, b = nodes[:-1], nodes[1:]
         with np.errstate(divide="ignore", invalid="ignore"):
-            N_a = (target[b] - target[a] + sum_cS - S[a] * sum_c) / sum_c
+            N_a = (target[1:] - target[:-1] + sum_cS - S[a] * sum_c) / sum_c
         # the element forces just right and just left of every held node
         right = np.append(N_a, 0.0)
         left = np.concatenate(([0.0], N_a - (S[b - 1] - S[a])))
@@ -105,8 +112,8 @@ class WallsOnChain:
         right[last] = tail  # the loads beyond the node
         reaction = left - right - self.loads[nodes]
         # a + wall pushes in -x (its force is −R), a - wall in +x
-        force = np.where(held[1][nodes], -reaction, reaction)
-        return u, nodes, force
+        force = np.where(plus, -reaction, reaction)
+        return u, nodes, force, pinned
 
     def head_load(self, nodes: np.ndarray) -> np.ndarray:
         """The force in the element just left of each of ``nodes``, the first held node of its
@@ -161,10 +168,7 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
     (a free end on the left); 0: both ends held (the first and last points, at 0)."""
     if x.size < 2:
         return np.zeros(x.size, dtype=np.intp)
-    dx = np.diff(x)
-    from scipy.optimize import isotonic_regression  # here: scipy.optimize takes 0.2 s to import
-
-    slope = isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
+    slope = minorant_slopes(x, y)
     if clip < 0:
         slope = np.minimum(slope, 0.0)
     elif clip > 0:
@@ -175,6 +179,104 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
     if clip < 0 and slope[-1] < 0.0:  # the minorant falls to the last point: its lowest
         vertices = np.append(vertices, x.size - 1)
     return vertices
+
+
+HULL_LEVELS = 64  # levels of minorant_slopes before it hands the points to scipy
+PRUNING_PASSES = 1  # passes that drop the points no corner can be, before the tangents
+# (one: on the channel and the patch later passes drop one point per dent and pass)
+MAX_JOINS = 32  # at most this many dents left: convex runs joined by tangents, else quickhull
+
+
+def minorant_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The slope of the greatest convex minorant of the points (x, y) (x increasing) over
+    each step of x: the weighted isotonic regression of the steps' slopes (weights the steps
+    of x) that scipy.optimize.isotonic_regression gives, found as the lower hull instead
+    (importing scipy.optimize takes 0.2-0.3 s, on the first solve of every process that
+    meets a passed wall). A point where the slope does not rise is no vertex of the hull, and
+    dropping all such points at once leaves the hull as it is: one such pass leaves convex
+    runs between a few dents (the channel, the flat patch), joined by their common tangents
+    (:func:`_join_convex_runs`); many dents go to a quickhull (:func:`_lower_hull`)."""
+    corners = np.arange(x.size)
+    for _ in range(PRUNING_PASSES):
+        slope = np.diff(y[corners]) / np.diff(x[corners])
+        rises = slope[1:] > slope[:-1]
+        if rises.all():
+            return np.repeat(slope, np.diff(corners))
+        corners = corners[np.concatenate(([True], rises, [True]))]
+    # what is left is convex but at a few points (each pass above dropped one point there):
+    # join its convex runs by their common tangents; many such points, a quickhull
+    slope = np.diff(y[corners]) / np.diff(x[corners])
+    dents = np.flatnonzero(slope[1:] <= slope[:-1]) + 1  # no corner there
+    if dents.size == 0:  # the last pass left only corners
+        return np.repeat(slope, np.diff(corners))
+    joined = _join_convex_runs(x, y, corners, dents) if dents.size <= MAX_JOINS else None
+    corners = _lower_hull(x, y, corners) if joined is None else joined
+    if corners is None:  # rare: a very lopsided hull
+        from scipy.optimize import isotonic_regression
+
+        dx = np.diff(x)
+        return isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
+    return np.repeat(np.diff(y[corners]) / np.diff(x[corners]), np.diff(corners))
+
+
+def _join_convex_runs(x: np.ndarray, y: np.ndarray, corners: np.ndarray,
+                      dents: np.ndarray) -> np.ndarray | None:
+    """The lower hull of the points ``corners``, which are convex runs apart from the points
+    at the positions ``dents`` (no vertex can be there: the slope does not rise): the runs
+    joined left to right, each by the common tangent of the hull so far and the next run
+    (the tangent's ends found in turn until neither moves; collinear points between them
+    dropped). None if a tangent does not settle (the caller uses the quickhull)."""
+    bounds = np.concatenate(([0], dents, [corners.size - 1]))
+    hull = corners[: bounds[1]]
+    for a, b in zip(bounds[1:-1].tolist(), bounds[2:].tolist()):
+        run = corners[a + 1: b + 1] if b == corners.size - 1 else corners[a + 1: b]
+        if run.size == 0:  # two dents side by side
+            continue
+        i, j = hull.size - 1, 0
+        for _ in range(HULL_LEVELS):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                to_run = (y[run] - y[hull[i]]) / (x[run] - x[hull[i]])
+                j_new = run.size - 1 - int(np.argmin(to_run[::-1]))  # the last of a tie
+                from_hull = (y[run[j_new]] - y[hull]) / (x[run[j_new]] - x[hull])
+                i_new = int(np.argmax(from_hull))  # the first of a tie
+            if (i_new, j_new) == (i, j):
+                break
+            i, j = i_new, j_new
+        else:
+            return None
+        hull = np.concatenate((hull[: i + 1], run[j:]))
+    return hull
+
+
+def _lower_hull(x: np.ndarray, y: np.ndarray, candidates: np.ndarray) -> np.ndarray | None:
+    """The vertices of the lower hull of the points ``candidates`` (indices, increasing, the
+    first and the last among them), by quickhull with every segment split at once: each level
+    keeps the points below their segment's chord and makes the lowest of them a vertex. A
+    smooth stretch takes about log2(points) levels; None past HULL_LEVELS."""
+    vertex = np.zeros(x.size, dtype=bool)
+    vertex[candidates[[0, -1]]] = True
+    points = candidates[1:-1]
+    left = np.full(points.size, candidates[0])
+    right = np.full(points.size, candidates[-1])
+    for _ in range(HULL_LEVELS):
+        # how far below the chord of its segment each point lies (> 0: below)
+        depth = ((y[left] - y[points]) * (x[right] - x[left])
+                 + (y[right] - y[left]) * (x[points] - x[left]))
+        below = depth > 0.0
+        points, left, right, depth = points[below], left[below], right[below], depth[below]
+        if points.size == 0:
+            return np.flatnonzero(vertex)
+        first = np.flatnonzero(run_starts(left))  # the segments, in order along x
+        deepest = np.maximum.reduceat(depth, first)
+        sizes = np.diff(np.append(first, points.size))
+        lowest = np.flatnonzero(depth == np.repeat(deepest, sizes))  # the first of a tie
+        split = points[lowest[run_starts(left[lowest])]]
+        vertex[split] = True
+        at = np.repeat(split, sizes)
+        right, left = np.where(points < at, at, right), np.where(points > at, at, left)
+        keep = points != at
+        points, left, right = points[keep], left[keep], right[keep]
+    return None
 
 
 def solve_on_chain(model: Model | Condensed, contact: str, max_iterations: int | None = None
@@ -202,26 +304,25 @@ def solve_hull(model: Model, *, max_iterations: int | None = None, load_factor: 
     limit = default_max_iterations(chain.n_rows) if max_iterations is None else max_iterations
     seen: set[bytes] = set()
     for step in range(1, limit + 1):
-        u, nodes, force = chain.statics(held)
+        u, nodes, force, pinned = chain.statics(held)
         scale = max(chain.force_tolerance_base, float(np.abs(force).max(initial=0.0)))
         force_tol = DECISION_RTOL * scale
         disp_tol = DECISION_RTOL * max(float(np.abs(u).max(initial=0.0)),
                                        chain.displacement_floor)
         pulling = nodes[(force < -force_tol) & ~chain.support[nodes]]  # a support may pull
-        pinned = chain.support | held[1] | held[-1]
         passed = {side: ~pinned & (chain.bound[side] - side * u < -disp_tol)
-                  for side in (1, -1)}
-        if not pulling.size and not passed[1].any() and not passed[-1].any():
+                  for side in chain.sides}
+        if not pulling.size and not any(p.any() for p in passed.values()):
             return _solution(chain, u, nodes, force, held, step), np.zeros(0)
-        key = held[1].tobytes() + held[-1].tobytes()
+        key = np.packbits(held[1]).tobytes() + np.packbits(held[-1]).tobytes()
         if key in seen:
             break
         seen.add(key)
         for side in (1, -1):
             held[side][pulling] = False
-        for side in (1, -1):
-            if passed[side].any():
-                held[side] |= chain.add_hull_walls(side, u, pinned, passed[side], disp_tol)
+        for side, stretch in passed.items():
+            if stretch.any():
+                held[side] |= chain.add_hull_walls(side, u, pinned, stretch, disp_tol)
         held[-1] &= ~held[1]
     active = np.zeros(chain.n_rows, dtype=bool)
     for side in (1, -1):

@@ -35,6 +35,7 @@ from contactqp.model.chain import (
     displacement_scale_rule,
     elongation_rows,
     force_scale_rule,
+    scene_model,
     wall_stiffness,
     without_circulation,
 )
@@ -46,5 +47,5 @@ __all__ = [
     "displacement_scale", "displacement_scale_rule", "element_forces", "elongation_rows",
     "force_scale_rule", "in_set", "largest",
     "link_forces", "load_force_scale", "load_force_terms", "node_set", "penetration", "run_ends", "run_starts",
-    "seen_stiffness", "spread", "wall_stiffness", "without_circulation",
+    "scene_model", "seen_stiffness", "spread", "wall_stiffness", "without_circulation",
 ]

@@ -146,6 +146,14 @@ class Model:
         """K⁻¹P: the displacement the loads cause with no contact at all."""
         return self.solve_K(self.P)
 
+    @cached_property
+    def free_displacement_of_nodes(self) -> np.ndarray:
+        """K⁻¹P at every node (0 at the supports), once per model: the hull starts from it
+        and the check's natural map reads the free gaps from it (read-only)."""
+        u = self.full_displacements(self.free_displacement)
+        u.flags.writeable = False
+        return u
+
     def solve_K_and_loads(self, rhs: np.ndarray) -> np.ndarray:
         """K⁻¹ rhs (columns), with K⁻¹P (:attr:`free_displacement`) from the same
         factorisation when it is not known yet."""
@@ -260,6 +268,27 @@ def build_model(scene: Scene | Layout) -> Model:
                      shape=(rows.gap.size, free.size))
     P = free_loads(layout)
     return Model(layout, free, band, P, C, rows.gap)
+
+
+def scene_model(scene: Scene) -> Model:
+    """The model of ``scene``, built once and kept with the scene's layout: a Scene does not
+    change, so every later solve, preparation or load path of the same scene object reuses
+    the model and what it has worked out since (K's solves and factor, K⁻¹P, the scales F
+    and U, the free gaps; :class:`Model`'s cached properties), and computes none of it
+    twice. Its arrays are read-only, so that no caller can change what the next one reads.
+    A scene with other values (:meth:`Scene.with_values`) has a layout of its own, and so a
+    model of its own."""
+    layout = scene.layout
+    model = layout.__dict__.get(_KEPT_MODEL)
+    if model is None:
+        model = build_model(layout)
+        for array in (model.free, model.band, model.P):
+            array.flags.writeable = False
+        layout.__dict__[_KEPT_MODEL] = model
+    return model
+
+
+_KEPT_MODEL = "_scene_model"  # where scene_model keeps a layout's model
 
 
 def free_loads(layout: Layout) -> np.ndarray:
@@ -381,5 +410,5 @@ def wall_stiffness(model: Model | Condensed) -> float | None:
 
 
 __all__ = ["Model", "build_model", "determinate_chain_solve", "displacement_scale",
-           "displacement_scale_rule", "elongation_rows", "force_scale_rule", "wall_stiffness",
+           "displacement_scale_rule", "elongation_rows", "force_scale_rule", "scene_model", "wall_stiffness",
            "without_circulation"]

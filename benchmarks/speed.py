@@ -1,0 +1,179 @@
+"""Issue 28's figures from one command: each a ratio to a floor measured in the same run.
+
+    solve 10⁶         solve(scene) with its defaults on the tapered bar of 10⁶ elements, one
+                      wall; floor: one banded factor-and-solve of K (benchmarks/cases.floor)
+    condensed 10⁶     the same scene by Lagrange, formulation="condensed"
+    walls 10⁵ warm    solve(scene) again on a scene of 10⁵ walls (a two-sided channel, a
+                      pressed flat patch; contactqp.builders) whose model is built once
+    walls 10⁵ first   building that scene and its first solve, timed in this process and, in
+                      a fresh process (a subprocess), with the imports the first solve needs
+    check / method    the check's time over the method's, from the Results' own timings
+    default scene     one verified solve of contactqp.default_scene() against the seed's numpy
+                      script (benchmarks/loop.py, hand_script); prepared.solve against the same
+    solve_many 10⁴    10⁴ cases varying the load and the gap against a vectorised numpy version
+
+Every row gives the method's, the check's and the build's time apart (Result.timings).
+Writes speed.json.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import contactqp
+from cases import floor, machine, median_time, tapered_scene
+from contactqp.builders import channel, flat_patch
+from loop import FORCE, GAP, hand_script, hand_stiffness
+
+FIRST_SOLVE = """
+import sys, time
+start = time.perf_counter()
+import contactqp
+from contactqp.builders import {builder}
+imported = time.perf_counter()
+scene = {builder}({size})
+built = time.perf_counter()
+result = contactqp.solve(scene)
+done = time.perf_counter()
+assert result.verified, result.message
+print(imported - start, built - imported, done - built)
+"""
+
+
+def _split(result: contactqp.Result) -> dict[str, float]:
+    return {name: result.timings.get(name, 0.0) for name in ("build", "solve", "check")}
+
+
+def _row(name: str, seconds: float, base: float, against: str, goal: float,
+         result: contactqp.Result | None = None, **extra: object) -> dict:
+    row = {"run": name, "seconds": seconds, "ratio": seconds / base, "against": against,
+           "goal": goal, **extra}
+    if result is not None:
+        row.update(_split(result))
+        row["check_over_method"] = row["check"] / row["solve"]
+    return row
+
+
+def _timed_solve(scene: contactqp.Scene, repeats: int, **options: object
+                 ) -> tuple[float, contactqp.Result]:
+    results = []
+
+    def once() -> None:
+        results.append(contactqp.solve(scene, **options))
+
+    seconds = median_time(once, repeats)
+    last = results[-1]
+    if not last.verified:
+        raise SystemExit(f"{scene.name}: not verified ({last.message})")
+    # the split of the median run: the Result whose total is the median
+    middle = sorted(results[1:], key=lambda r: r.time)[len(results[1:]) // 2]
+    return seconds, middle
+
+
+def long_bar(quick: bool) -> list[dict]:
+    n = 10**5 if quick else 10**6
+    repeats = 3 if quick else 7
+    scene = tapered_scene(n)
+    base = floor(scene, repeats)
+    rows = [_row(f"floor: pbsv on K, {n} elements", base, base, "", 1.0)]
+    seconds, result = _timed_solve(scene, repeats)
+    rows.append(_row(f"solve(scene), {n} elements", seconds, base, "floor", 3.0, result))
+    seconds, result = _timed_solve(scene, repeats, formulation="condensed")
+    rows.append(_row(f"condensed lagrange, {n} elements", seconds, base, "floor", 2.0, result))
+    return rows
+
+
+def _fresh_process(builder: str, size: int) -> dict[str, float]:
+    code = FIRST_SOLVE.format(builder=builder, size=size)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    imported, built, solved = map(float, out)
+    return {"import": imported, "scene": built, "first_solve": solved}
+
+
+def many_walls(quick: bool) -> list[dict]:
+    size = 10**4 if quick else 10**5
+    repeats = 3 if quick else 7
+    rows = []
+    for builder in (channel, flat_patch):
+        scene = builder(size)
+        base = floor(scene, repeats)
+        rows.append(_row(f"floor: pbsv on K, {scene.name}", base, base, "", 1.0))
+        seconds, result = _timed_solve(scene, repeats)
+        rows.append(_row(f"{scene.name}, warm re-solve", seconds, base, "floor", 12.0, result))
+        start = time.perf_counter()
+        fresh = builder(size)
+        made = time.perf_counter()
+        result = contactqp.solve(fresh)
+        seconds = time.perf_counter() - made
+        rows.append(_row(f"{scene.name}, first solve (this process)", seconds, base, "floor",
+                         20.0, result, scene_build=made - start))
+        fresh = _fresh_process(builder.__name__, size)
+        rows.append(_row(f"{scene.name}, first solve (fresh process)", fresh["first_solve"],
+                         base, "floor", 20.0, None, **fresh))
+    return rows
+
+
+def default_loop(quick: bool) -> list[dict]:
+    repeats, cases = (50, 1000) if quick else (300, 10_000)
+    scene = contactqp.default_scene()
+    script = median_time(hand_script, repeats)
+    rows = [_row("seed numpy script", script, script, "", 1.0)]
+    result = contactqp.solve(scene)
+    if not (result.verified and math.isclose(result.contact_force[0], hand_script()[1],
+                                             rel_tol=1e-9)):
+        raise SystemExit("default scene: the library and the seed script disagree")
+    seconds, result = _timed_solve(scene, repeats)
+    rows.append(_row("solve(default scene)", seconds, script, "seed script", 15.0, result))
+    prepared = contactqp.prepare(scene)
+    one = np.array([1.1 * FORCE])
+    result = prepared.solve(one)
+    seconds = median_time(lambda: prepared.solve(one), repeats)
+    rows.append(_row("prepared.solve", seconds, script, "seed script", 8.0, result))
+    factors = np.linspace(0.5, 1.5, cases)
+    loads, gaps = (FORCE * factors)[:, None], (GAP * factors[::-1])[:, None]
+    exact = vectorised(loads[:, 0], gaps[:, 0])
+    numpy_time = median_time(lambda: vectorised(loads[:, 0], gaps[:, 0]), repeats)
+    rows.append(_row(f"vectorised numpy, {cases} cases", numpy_time, numpy_time, "", 1.0))
+    batch = prepared.solve_many(loads, gaps)
+    if not (batch.verified.all() and np.allclose(batch.contact_force[:, 0], exact, rtol=1e-9,
+                                                 atol=1e-9 * FORCE)):
+        raise SystemExit("solve_many disagrees with the vectorised numpy version")
+    seconds = median_time(lambda: prepared.solve_many(loads, gaps), 3)
+    rows.append(_row(f"solve_many, {cases} cases (load and gap)", seconds, numpy_time,
+                     "vectorised numpy", 10.0))
+    return rows
+
+
+def vectorised(forces: np.ndarray, gaps: np.ndarray) -> np.ndarray:
+    """The tip wall's force of every case, as benchmarks/loop.py's hand_vectorised writes it:
+    the free displacements of all cases by one solve with K and many right-hand sides, then
+    the closed form of one wall, λ = max(0, (u_free,tip − g) / (K⁻¹)_tip,tip)."""
+    K = hand_stiffness()
+    P = np.zeros((4, forces.size))
+    P[1] = forces  # the load at node 2
+    u_free = np.linalg.solve(K, P)
+    flexibility = np.linalg.solve(K, np.eye(4)[:, -1])[-1]
+    return np.maximum(0.0, (u_free[-1] - gaps) / flexibility)
+
+
+def main(quick: bool, out: Path) -> None:
+    rows = long_bar(quick) + many_walls(quick) + default_loop(quick)
+    print(f"{'run':48} {'ms':>9} {'ratio':>7} {'goal':>5} {'build':>7} {'method':>7} "
+          f"{'check':>7} {'chk/mth':>7}")
+    for r in rows:
+        split = "".join(f" {1e3 * r[k]:7.2f}" if k in r else f" {'':7}"
+                        for k in ("build", "solve", "check"))
+        ratio = f" {r['check_over_method']:7.2f}" if "check_over_method" in r else ""
+        goal = f"{r['goal']:5.0f}" if r["against"] else ""
+        print(f"{r['run']:48} {1e3 * r['seconds']:9.3f} {r['ratio']:7.1f} {goal:>5}{split}{ratio}"
+              + (f"  import {1e3 * r['import']:.0f} ms" if "import" in r else ""))
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "speed.json").write_text(json.dumps({"machine": machine(), "rows": rows}, indent=1))
