@@ -153,7 +153,14 @@ def obstacle_scenes(draw):
 def test_random_obstacles_match_the_exact_reference(scene):
     exact = reference(scene)
     result = contactqp.solve(scene, "lagrange", formulation="full")
-    assert result.info.get("active_set") == "hull"
+    # the hull settles every obstacle by itself, except where walls touch with no force (the
+    # exact answer neither presses nor leaves them, and round-off picks either): there its set
+    # may come back, and the passed loop finishes from it (hypothesis: walls at zero gap on the
+    # unloaded span between two supports, u = 0 there to 3.5e-11 of U = 7 m)
+    touching = (exact.contact_force == 0.0) & (
+        np.abs(result.penetration) <= 1e-9 * result.displacement_scale)
+    assert result.info.get("active_set") == "hull" or (
+        touching.any() and result.info["active_set"].startswith("hull, then passed"))
     largest = max(np.abs(exact.contact_force).max(), 1e-300)
     # the goal, plus round-off: a touching wall's exact force is 0, and both answers carry
     # ~1e-13 F there. A backward-stable float64 solve is off by about eps·κ(K)·F, and κ(K) is
