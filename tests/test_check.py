@@ -25,7 +25,13 @@ from closed_forms import (
 )
 from contactqp import (
     TOLERANCES,
+    Bar,
+    BarContact,
+    Load,
+    Scene,
+    Support,
     Tolerances,
+    Wall,
 )
 from contactqp.check import section_residual
 
@@ -213,3 +219,26 @@ def test_a_message_names_the_hardest_pulls_and_counts_the_rest():
     hardest = pulling[np.argsort(lam[pulling], kind="stable")][:5]
     listed = ", ".join(f"wall[{i}] {lam[i]:.6g} N" for i in hardest)
     assert f"a wall pulls the bar ({listed} and {pulling.size - 5} more)" in result.message
+
+
+def test_a_force_carried_round_a_loop_of_rows_is_not_verified():
+    """Node 2 of bar 0 (supported at node 0, F at node 2) against a wall at zero gap, and by a
+    bar contact 1e-16 m open onto bar 1's node 0, itself 1e-16 m from a second wall: two ways
+    from the node to the ground. The exact answer (statics: the nearer wall, zero gap, takes
+    all of F; the reference agrees) leaves the other way open. An answer that sends 0.4 F the
+    long way round, with every gap closed to 2e-16 m, balances every node and meets every
+    residual but the force bound, which must count the force round the loop: the check once
+    verified it with a bound of 1.2e-8 N (found as ProxQP's 15 N round such a loop on a
+    random scene, seed 139)."""
+    F, c, gap = 1e3, 400.0, 1e-16
+    scene = Scene((Bar.from_areas([1e-4, 1e-4], 2e11, length=0.5),
+                   Bar.from_areas([1e-4], 2e11, length=0.5)),
+                  (Support(0, 0), Support(1, 1)), (Load(2, F, 0),),
+                  (Wall(2, 0.0, "+", 0), Wall(0, gap, "+", 1)),
+                  contacts=(BarContact(0, 2, 1, 0, gap),))
+    from contactqp.reference import reference
+
+    assert reference(scene).contact_force.tolist() == [F, 0.0, 0.0]
+    found = contactqp.check(scene, np.zeros(5), [F - c, c, c], np.zeros(2), "inequality")
+    assert not found.verified
+    assert found.force_error_bound >= c
