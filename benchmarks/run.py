@@ -1,7 +1,7 @@
 """The benchmarks, one entry point: named groups of cases, each measured against a floor from
 the same run (one banded factor-and-solve of K) and, where it has one, an exact reference.
 
-    python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,loop,lcp,guarantee]
+    python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,loop,lcp,guarantee,fem]
                              [--quick] [--out DIR] [--scenes N] [--seed S]
     python benchmarks/run.py --check DIR       # is a matrix output folder complete? (CI)
 
@@ -20,6 +20,8 @@ the same run (one banded factor-and-solve of K) and, where it has one, an exact 
                against the mesh and the stiffness contrast (benchmarks/lcp.py)
     guarantee  does verified mean right? every method on --scenes random scenes against the
                exact reference (benchmarks/guarantee.py)
+    fem        the 2D cases (scikit-fem: the Hertz cylinder at two meshes, the block on a wavy
+               foundation) by every method and QP solver, timed and judged (benchmarks/fem2d.py)
 
 Case builders and timing: benchmarks/cases.py. Outputs go to DIR (default benchmarks/out),
 one subfolder per group.
@@ -32,13 +34,14 @@ import sys
 from pathlib import Path
 
 import contacts
+import fem2d
 import groups
 import guarantee
 import lcp
 import loop
 import matrix
 
-CASES = ("matrix", "taper", "walls", "contacts", "overhead", "loop", "lcp", "guarantee")
+CASES = ("matrix", "taper", "walls", "contacts", "overhead", "loop", "lcp", "guarantee", "fem")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -73,6 +76,8 @@ def main(argv: list[str] | None = None) -> int:
             contacts.main(args.quick, out / "contacts")
         elif name == "loop":
             loop.main(args.quick, out / "loop")
+        elif name == "fem":
+            fem2d.main(args.quick, out / "fem")
         elif name == "lcp":
             lcp.main(args.quick, out / "lcp")
         elif name == "guarantee":
