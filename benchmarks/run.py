@@ -1,7 +1,8 @@
 """The benchmarks, one entry point: named groups of cases, each measured against a floor from
 the same run (one banded factor-and-solve of K) and, where it has one, an exact reference.
 
-    python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,loop,speed,lcp,guarantee]
+    python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,loop,speed,lcp,
+                              guarantee,fem]
                              [--quick] [--out DIR] [--scenes N] [--seed S]
     python benchmarks/run.py --check DIR       # is a matrix output folder complete? (CI)
 
@@ -24,6 +25,8 @@ the same run (one banded factor-and-solve of K) and, where it has one, an exact 
                against the mesh and the stiffness contrast (benchmarks/lcp.py)
     guarantee  does verified mean right? every method on --scenes random scenes against the
                exact reference (benchmarks/guarantee.py)
+    fem        the 2D cases (scikit-fem: the Hertz cylinder at two meshes, the block on a wavy
+               foundation) by every method and QP solver, timed and judged (benchmarks/fem2d.py)
 
 Case builders and timing: benchmarks/cases.py. Outputs go to DIR (default benchmarks/out),
 one subfolder per group.
@@ -36,6 +39,7 @@ import sys
 from pathlib import Path
 
 import contacts
+import fem2d
 import groups
 import guarantee
 import lcp
@@ -43,7 +47,8 @@ import loop
 import matrix
 import speed
 
-CASES = ("matrix", "taper", "walls", "contacts", "overhead", "loop", "speed", "lcp", "guarantee")
+CASES = ("matrix", "taper", "walls", "contacts", "overhead", "loop", "speed", "lcp", "guarantee",
+         "fem")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -80,6 +85,8 @@ def main(argv: list[str] | None = None) -> int:
             loop.main(args.quick, out / "loop")
         elif name == "speed":
             speed.main(args.quick, out / "speed")
+        elif name == "fem":
+            fem2d.main(args.quick, out / "fem")
         elif name == "lcp":
             lcp.main(args.quick, out / "lcp")
         elif name == "guarantee":

@@ -250,8 +250,13 @@ def test_the_lcp_methods_refuse_beyond_their_stated_size():
     n = LCP_ROWS + 1  # a row on every dof: one row more than W may have
     K = sp.diags_array(np.full(n, 2.0)).tocsr()
     problem = contactqp.Problem(K, np.ones(n), sp.eye_array(n, format="csr"), np.full(n, 0.1))
-    with pytest.raises(SolverError, match="use lagrange"):
-        contactqp.solve(problem, "lemke")
+    for method in ("lemke", "pgs", "semismooth_newton"):
+        with pytest.raises(SolverError, match="use lagrange") as refusal:
+            contactqp.solve(problem, method)
+        # the problem's own words: its rows and dofs, not a bar scene's nodes
+        message = str(refusal.value)
+        assert f"this problem has {n} contact rows and {n} free dofs" in message
+        assert "scene" not in message and "node" not in message
     result = contactqp.solve(problem, "penalty")  # a wall at 0.1 holds each dof: λ = 1 − 2·0.1
     assert result.verified and np.allclose(result.contact_force, 0.8, rtol=1e-5)
 
@@ -279,5 +284,7 @@ def test_a_model_held_by_contact_alone():
         result = contactqp.solve(problem, method, **options)
         assert_within_bounds(result, np.array([0.0, -1.0, -2.0, -3.0]), np.array([1.0]))
         assert result.verified or method != "lagrange"
-    with pytest.raises(SolverError, match="needs K⁻¹"):
-        contactqp.solve(problem, "lemke")
+    for method in ("lemke", "pgs", "semismooth_newton"):
+        with pytest.raises(SolverError, match="needs K⁻¹") as refusal:
+            contactqp.solve(problem, method)
+        assert "scene" not in str(refusal.value) and "node" not in str(refusal.value)

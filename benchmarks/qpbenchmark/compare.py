@@ -11,7 +11,9 @@ through qpsolvers, as qpbenchmark solves it, and judged twice:
   and duality gap are all under the setting's tolerances;
 - contactqp: the duals read as contact forces (λ = z, or F·z for a scaled problem), the primal
   as displacements (u = x, or U·x), checked by contactqp.check against the scene (verified or
-  not), and compared with the exact contact forces (right: within 1e-5 of the scene's F).
+  not), and compared with the exact contact forces (right: within 1e-5 of the scene's F);
+  a 2D problem (exact.json names it by ``fem``: export.py builds it again with scikit-fem)
+  is checked by contactqp's check for a problem (contactqp.problem_check) the same way.
 
 Writes results/compare.md: the counts, and every disagreement (a success whose force is wrong,
 a failure whose force is right) with its numbers.
@@ -32,9 +34,12 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from contactqp_test_set import ContactqpTestSet
+from export import fem_problems
 
 import contactqp
 from contactqp.model import element_forces, link_forces
+from contactqp.model.sparse import build_sparse_model
+from contactqp.problem_check import check_problem
 from contactqp.result import support_reactions
 
 PROBLEMS = HERE / "problems"
@@ -58,8 +63,22 @@ def judge(problem_name: str, exact: dict, scene: contactqp.Scene,
     return verdict.verified, error <= contactqp.GUARANTEE[0], error
 
 
+def judge_problem(exact: dict, problem: contactqp.Problem,
+                  solution: qpsolvers.Solution) -> tuple[bool, bool, float]:
+    """judge() for a 2D problem: x the free dofs (u = U·x), z the rows' forces (λ = F·z)."""
+    if solution.x is None or solution.z is None:
+        return False, False, float("inf")
+    lam = np.asarray(solution.z, dtype=float) * exact["force_scale"]
+    u_free = np.asarray(solution.x, dtype=float) * exact["displacement_scale"]
+    verdict = check_problem(build_sparse_model(problem), u_free, lam)
+    error = float(np.abs(lam - np.asarray(exact["exact_duals"]) * exact["force_scale"]).max(
+        initial=0.0)) / verdict.force_scale
+    return verdict.verified, error <= contactqp.GUARANTEE[0], error
+
+
 def main() -> None:
     test_set = ContactqpTestSet()
+    fem: dict[str, contactqp.Problem] | None = None  # the 2D problems, built when first met
     exact_all = json.loads((PROBLEMS / "exact.json").read_text())
     counts: Counter[tuple[bool, bool]] = Counter()
     disagreements = []
@@ -67,7 +86,11 @@ def main() -> None:
     for path in sorted(PROBLEMS.glob("*.npz"), key=lambda p: (p.stat().st_size, p.name)):
         name = path.stem
         exact = exact_all[name]
-        scene = contactqp.load_scene(PROBLEMS / f"{exact['scene']}.toml")
+        if "fem" in exact:  # a 2D problem, built again (its K is not kept twice)
+            fem = fem_problems() if fem is None else fem
+            source: contactqp.Scene | contactqp.Problem = fem[exact["fem"]]
+        else:
+            source = contactqp.load_scene(PROBLEMS / f"{exact['scene']}.toml")
         problem = test_set.get_problem(name)  # as qpbenchmark hands it to each solver
         for solver in solvers:
             # converted for this solver only (qpbenchmark.utils.time_solve_problem): PIQP and
@@ -92,7 +115,10 @@ def main() -> None:
                 success = bool(solution.found) and all(
                     r is not None and np.isfinite(r) and r < t for r, t in
                     zip(residuals, (tolerance.primal, tolerance.dual, tolerance.gap)))
-                verified, right, error = judge(name, exact, scene, solution)
+                verified, right, error = (
+                    judge_problem(exact, source, solution)
+                    if isinstance(source, contactqp.Problem)
+                    else judge(name, exact, source, solution))
                 counts[success, right] += 1
                 if success != right or verified != right:
                     disagreements.append((name, solver, settings, success, verified, right,

@@ -7,8 +7,11 @@ Each problem is the QP of an elastic bar scene against rigid walls (contactqp), 
 and scaled to order one: minimise ½ xᵀKx − Pᵀx subject to C x <= g, K the stiffness of a
 chain (tridiagonal, positive definite; only positive semidefinite in the free_bar,
 held_by_contact and free_bars problems, whose bars have no support and are held by their
-contacts alone), C one row per wall (or bar contact). Its duals are the
-contact forces; problems/exact.json holds the exact ones (benchmarks/qpbenchmark/README.md).
+contacts alone), C one row per wall (or bar contact). Two 2D problems from scikit-fem join
+them: hertz_coarse (a plane-strain cylinder on a rigid flat, 7 499 unknowns, 17 rows) and
+block_wavy (a block on a wavy foundation, 1 640 unknowns, 41 rows), K a P1 elasticity
+stiffness. Its duals are the contact forces; problems/exact.json holds the exact ones
+(benchmarks/qpbenchmark/README.md).
 qpbenchmark loads this file and instantiates ContactqpTestSet (the name it derives from the
 file's).
 """
@@ -66,7 +69,8 @@ class ContactqpTestSet(qpbenchmark.TestSet):
                 "duals are the contact forces, known exactly. The Hessian is positive "
                 "definite but in the free_bar, held_by_contact and free_bars problems, where "
                 "bars with no support are held by their contacts alone (positive "
-                "semidefinite).")
+                "semidefinite). Two 2D elasticity problems (scikit-fem, P1 plane strain: a "
+                "cylinder on a rigid flat, a block on a wavy foundation) join them.")
 
     @property
     def title(self) -> str:

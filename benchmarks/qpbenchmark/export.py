@@ -13,6 +13,15 @@ G x <= h) are the contact forces: λ = z (SI, N) or λ = F·z (scaled). exact.js
 problem, the exact duals (from contactqp.reference: statics in extended precision or rational
 arithmetic, never a solver), the scales U and F, and the scene's file so that a solution can be
 checked (benchmarks/qpbenchmark/compare.py).
+
+Two 2D problems from scikit-fem (contactqp.fem; skipped with a note when it is not installed),
+each a contactqp.Problem: hertz_coarse, the Hertz cylinder at its coarse mesh (docs/hertz.md:
+h = 0.05 mm along the contact strip, 7 499 free dofs, 17 rows), and block_wavy, the block on a
+wavy foundation (1 640 free dofs, 41 rows). Their QP is the sparse model's
+(contactqp.methods.sparse.qp_from_sparse: x the free dofs, P = K_II, q = −(f_I − K_ID u_D),
+G = C_I); their exact duals are Lagrange's answer, verified, with the distance the check
+measured to the exact answer on its contact set (``exact_duals_bound``, over F: about 1e-12).
+Instead of a scene file, exact.json names the problem (``fem``), which compare.py builds again.
 """
 
 from __future__ import annotations
@@ -32,6 +41,8 @@ sys.path.insert(0, str(HERE.parent))  # benchmarks/cases.py
 import contactqp
 from cases import default_with, free_bar, tapered_scene, touching
 from contactqp.methods.qp.problem import qp_from_model
+from contactqp.methods.sparse import qp_from_sparse
+from contactqp.model.sparse import build_sparse_model
 from contactqp.reference import reference
 
 EXAMPLES = HERE.parent.parent / "examples"
@@ -56,6 +67,36 @@ def scenes() -> dict[str, contactqp.Scene]:
     out["free_bar"] = free_bar()
     out["free_bars"] = free_bars_between_walls()
     return out
+
+
+def fem_problems() -> dict[str, contactqp.Problem]:
+    """The 2D problems (module docstring), built with scikit-fem; {} without it."""
+    try:
+        from contactqp.fem import block_on_wavy_foundation, cylinder_on_flat
+        hertz = cylinder_on_flat(zone=0.5, fine=0.05).problem  # docs/hertz.md's first mesh
+    except ImportError as error:
+        print(f"skipped: the 2D problems need scikit-fem ({error})")
+        return {}
+    return {"hertz_coarse": hertz, "block_wavy": block_on_wavy_foundation()}
+
+
+def export_problem(name: str, problem: contactqp.Problem, out: Path) -> dict[str, dict]:
+    """A 2D problem's QP (SI and scaled) written to ``out``; its exact.json entries."""
+    model = build_sparse_model(problem)
+    exact = contactqp.solve(problem, "lagrange")
+    if not exact.verified:  # the reference must be the exact answer, not a solver's word
+        raise RuntimeError(f"{name}: Lagrange's answer is not verified ({exact.message})")
+    entries = {}
+    for scaled in (False, True):
+        qp = qp_from_sparse(model, "inequality", scale=scaled)
+        problem_name = f"{name}_{'scaled' if scaled else 'SI'}"
+        save(out / f"{problem_name}.npz", qp.K, qp.q, qp.C, qp.g)
+        entries[problem_name] = {
+            "fem": name, "scaled": scaled, "displacement_scale": qp.displacement_scale,
+            "force_scale": qp.force_scale,
+            "exact_duals": (exact.contact_force / qp.force_scale).tolist(),
+            "exact_duals_bound": exact.force_error_bound / exact.force_scale}
+    return entries
 
 
 def free_bars_between_walls() -> contactqp.Scene:
@@ -134,6 +175,8 @@ def main(out: Path) -> None:
                 "displacement_scale": qp.displacement_scale, "force_scale": qp.force_scale,
                 "exact_duals": (exact.contact_force / qp.force_scale).tolist()}
         (out / f"{name}.toml").write_text(scene_file(name, scene))
+    for name, problem in fem_problems().items():
+        exact_answers.update(export_problem(name, problem, out))
     (out / "exact.json").write_text(json.dumps(exact_answers, indent=1))
     print(f"{len(exact_answers)} problems written to {out}")
 

@@ -48,15 +48,18 @@ NEWTON_MAX_ITERATIONS = 100
 ARMIJO = 1e-4  # sufficient decrease of ½‖Φ‖² along the Newton step
 
 
-def contact_lcp(problem: Model | Condensed) -> tuple[np.ndarray, np.ndarray, np.ndarray,
-                                                    np.ndarray]:
+def contact_lcp(problem: Model | Condensed | SparseModel
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(W, q, K⁻¹P, K⁻¹Cᵀ) of a problem (module docstring); a SolverError past LCP_ROWS."""
     rows = problem.n_contacts
     if rows > LCP_ROWS or problem.n_free * rows > LCP_ENTRIES:
+        # a user's problem has dofs, a bar scene nodes: the refusal speaks the caller's words
+        what, unknowns = (("problem", "free dofs") if isinstance(problem, SparseModel)
+                          else ("scene", "free nodes"))
         raise SolverError(f"the complementarity methods form the dense flexibility W = C K⁻¹ Cᵀ "
                           f"(rows x rows) and K⁻¹Cᵀ: up to {LCP_ROWS} contact rows and "
-                          f"{LCP_ENTRIES} entries; this scene has {rows} rows and "
-                          f"{problem.n_free} free nodes (use lagrange)")
+                          f"{LCP_ENTRIES} entries; this {what} has {rows} contact rows and "
+                          f"{problem.n_free} {unknowns} (use lagrange)")
     columns, W = flexibility(problem)
     u_free = problem.free_displacement
     return W, problem.g - problem.C @ u_free, u_free, columns
