@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from contactqp.held import wedged_bars, wedged_rows
 from contactqp.model import (
     Layout,
     bar_groups,
@@ -139,12 +140,10 @@ def _pushing(layout: Layout, lam: np.ndarray, pen: np.ndarray, hold: float,
 
 
 def _wedged(layout: Layout) -> np.ndarray:
-    """:func:`contactqp.feasibility.wedged_rows` of the scene (all False where every bar has
+    """:func:`contactqp.held.wedged_rows` of the scene (all False where every bar has
     a support, without looking at the walls)."""
     if not layout.floating_bars.size:
         return np.zeros(layout.rows[3].size, dtype=bool)
-    from contactqp.feasibility import wedged_rows
-
     return wedged_rows(layout.scene)
 
 
@@ -295,8 +294,6 @@ def unpinned_bar(layout: Layout, pushing: np.ndarray) -> int | None:
     (through other bars), or None: nothing in the answer fixes where such a bar is."""
     if not layout.floating_bars.size:
         return None
-    from contactqp.feasibility import wedged_bars
-
     labels = bar_groups(layout.scene, pushing)
     loose = np.setdiff1d(np.flatnonzero(labels[:-1] != labels[-1]),
                          list(wedged_bars(layout.scene)))

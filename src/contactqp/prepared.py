@@ -21,7 +21,8 @@ import numpy as np
 
 from contactqp.batch import Batch, solve_batch, tiled_scene
 from contactqp.errors import OptionError, SceneError
-from contactqp.feasibility import equality_conflict, unheld_bars
+from contactqp.feasibility import equality_conflict
+from contactqp.held import unheld_bars
 from contactqp.layout import TOPOLOGY
 from contactqp.methods import Method, cases, complementarity
 from contactqp.model import Model, build_model, scene_model

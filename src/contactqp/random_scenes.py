@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp.errors import SceneError
-from contactqp.feasibility import unheld_bars
+from contactqp.held import unheld_bars
 from contactqp.model import build_model
 from contactqp.scene import Bar, BarContact, DistributedLoad, Load, Scene, Support, Wall
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp.errors import SceneError
-from contactqp.feasibility import unheld_bars
+from contactqp.held import unheld_bars
 from contactqp.reference_exact import Reference, rational_reference
 from contactqp.scene import Scene
 

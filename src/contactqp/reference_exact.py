@@ -17,7 +17,7 @@ where every bar has a support, so a certified A gives the unique displacements; 
 support (held only by its contacts) can move as a whole, and then only the active sets whose
 rows hold it can be solved (the loop starts from every row, and a set that leaves such a bar
 free ends the loop: the next path takes over), and the answer is unique where the loads press
-every such bar against its contacts (:func:`contactqp.feasibility.unheld_bars`).
+every such bar against its contacts (:func:`contactqp.held.unheld_bars`).
 
 On the rational path the contact rows are the edges of a graph whose vertices are the free
 nodes and GROUND (the supports): a wall joins its node to GROUND, a bar contact its two nodes.

@@ -14,7 +14,8 @@ import numpy as np
 
 from contactqp.builders import default_scene
 from contactqp.errors import OptionError, SceneError
-from contactqp.feasibility import equality_conflict, unheld_bars
+from contactqp.feasibility import equality_conflict
+from contactqp.held import unheld_bars
 from contactqp.methods import Method, checked_options, hull
 from contactqp.model import Condensed, Model, condense, scene_model
 from contactqp.problem import Problem

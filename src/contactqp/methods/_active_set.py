@@ -7,7 +7,7 @@ from collections.abc import Callable
 import numpy as np
 
 from contactqp.errors import SolverError
-from contactqp.feasibility import wedged_rows
+from contactqp.held import wedged_rows
 from contactqp.model import Model, bar_groups
 
 Step = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]

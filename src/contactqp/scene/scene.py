@@ -44,7 +44,7 @@ class Scene:
 
     ``bars``: one :class:`Bar` or a sequence of them (kept as a tuple either way). A bar
     with no support is held by its walls and bar contacts alone; its loads must press it
-    against them (checked at the solve, :func:`contactqp.feasibility.unheld_bars`). Contact rows, in this order everywhere (contact forces, penetrations):
+    against them (checked at the solve, :func:`contactqp.held.unheld_bars`). Contact rows, in this order everywhere (contact forces, penetrations):
     one per wall, then one per bar contact. ``units``: :data:`UNIT_SYSTEMS`.
 
     Parameters

@@ -40,7 +40,7 @@ def _numbering(bars: tuple[Bar, ...]):
 def _check_supports(scene: Scene, node) -> dict[int, int]:
     """No node held twice, not every node held, and something to hold a bar that has no
     support (a wall or a bar contact: whether its loads press it against one is decided with
-    the contact kind, :func:`contactqp.feasibility.unheld_bars`): {node: support index}."""
+    the contact kind, :func:`contactqp.held.unheld_bars`): {node: support index}."""
     held: dict[int, int] = {}
     for i, s in enumerate(scene.supports):
         at = node(f"support[{i}]", s.bar, s.node)
