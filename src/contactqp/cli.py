@@ -6,7 +6,11 @@ the studies ``compare``, ``penalty-sweep`` and ``curve``, which show failing run
 when their table was produced); 1 when ``solve`` computed an answer that fails its check or
 has a wall pulling (the reason on stderr); 2 for bad input or options (one line naming the
 field and the value); 3 for an unexpected error, which is a bug (one line, and where to report
-it). Nothing prints a traceback."""
+it). Nothing prints a traceback.
+
+(About 430 lines, past the ~400 the project keeps to: the commands and the parser that names
+them as its handlers stay together; a parser module apart would import the commands and be
+imported by them, a circle. The input checks that need no parser live in cli_input.)"""
 
 from __future__ import annotations
 

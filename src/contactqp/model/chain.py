@@ -5,6 +5,9 @@ supports taken out: tridiagonal, zero coupling between bars, kept in LAPACK's sy
 storage and solved in O(n): by statics when every bar is held by one support, else by one
 banded Cholesky factorisation. With the Lagrangian L = Π + λᵀ(C u − g), λ >= 0 is the force
 with which each wall (or the other bar) pushes, and the contacts' force on the nodes is −Cᵀλ.
+
+(About 415 lines, just past the ~400 the project keeps to: the Model and every solve with K
+it offers the methods, in one place; the condensed chain is in condense.py.)
 """
 
 from __future__ import annotations
