@@ -29,7 +29,19 @@ def installed_versions() -> list[str]:
     return found
 
 
+def cpu_name() -> str:
+    """The processor's model name (a LAPACK build can meet a singular matrix differently on
+    another CPU: issue 25's Nitsche failure showed on an Intel Xeon and not on an AMD EPYC)."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as info:
+            for line in info:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown CPU"
+
+
 def pytest_report_header(config) -> str:
     return (f"contactqp dependencies: Python {platform.python_version()} "
-            f"({platform.machine()}, {platform.processor() or 'unknown CPU'}); "
-            + ", ".join(installed_versions()))
+            f"({platform.machine()}, {cpu_name()}); " + ", ".join(installed_versions()))
