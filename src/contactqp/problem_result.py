@@ -4,7 +4,6 @@ reactions, penetration, the check, ``summary()``, ``to_json()``), without what o
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -16,11 +15,11 @@ from contactqp.check import GUARANTEE, TOLERANCES, Tolerances
 from contactqp.model.sparse import SparseModel
 from contactqp.problem import Problem
 from contactqp.problem_check import check_problem
-from contactqp.result import TOUCHING, Solution, plain
+from contactqp.result import TOUCHING, Reported, Solution, claim_warnings, plain
 
 
 @dataclass(frozen=True, eq=False)
-class ProblemResult:
+class ProblemResult(Reported):
     """Everything one solve of a :class:`~contactqp.Problem` found, with its independent check
     (:mod:`contactqp.problem_check`).
 
@@ -63,15 +62,8 @@ class ProblemResult:
     warnings: tuple[str, ...] = ()
     info: dict[str, Any] = field(default_factory=dict)
 
-    @property
-    def label(self) -> str:
-        """method (and solver where it says more), e.g. 'lagrange' or 'qp/osqp'."""
-        return self.method if self.solver == self.method else f"{self.method}/{self.solver}"
-
     def __repr__(self) -> str:
-        verdict = ("verified" if self.verified else "NOT verified") + (
-            "" if self.physical else ", a contact pulls")
-        return (f"<ProblemResult {self.label}, {self.contact} contact, {verdict}, "
+        return (f"<ProblemResult {self.label}, {self.contact} contact, {self._verdict()}, "
                 f"{int(np.count_nonzero(formatting.carrying(self.contact_force, self.force_scale)))}"
                 f" of {self.contact_force.size} rows push>")
 
@@ -136,10 +128,6 @@ class ProblemResult:
             "warnings": list(self.warnings), "info": plain(self.info),
         }
 
-    def to_json(self, indent: int | None = 2) -> str:
-        """:meth:`to_dict` as JSON text (no NaN: a non-finite number is null)."""
-        return json.dumps(self.to_dict(), indent=indent, allow_nan=False)
-
 
 TABLE_HEADER = [("method", ""), ("contact", ""), ("contact force", "(largest)"),
                 ("penetration", "(largest)"), ("residual", ""), ("verified", ""),
@@ -170,9 +158,7 @@ def make_problem_result(model: SparseModel, solution: Solution, *, method: str, 
     found = check_problem(model, u_free, lam, contact, tolerances)
     u = model.full_displacements(u_free)
     timings = {**timings, "check": time.perf_counter() - start}
-    warnings = []
-    if solution.claimed_success and not found.verified:
-        warnings.append(f"{solution.solver} reported {solution.status!r} but the check failed")
+    warnings = claim_warnings(solution, found.verified)
     return ProblemResult(
         problem=model.problem, model=model, method=method, solver=solution.solver,
         contact=contact, options=dict(options), u=u, contact_force=lam,

@@ -42,8 +42,34 @@ class Solution:
     info: dict[str, Any] = field(default_factory=dict)
 
 
+class Reported:
+    """What a scene's Result and a problem's (:class:`~contactqp.ProblemResult`) say alike:
+    the label, the verdict, JSON. Needs ``method``, ``solver``, ``verified``, ``physical``
+    and ``to_dict``."""
+
+    @property
+    def label(self) -> str:
+        """method (and solver where it says more), e.g. 'penalty' or 'qp/osqp'."""
+        return self.method if self.solver == self.method else f"{self.method}/{self.solver}"
+
+    def _verdict(self) -> str:
+        return ("verified" if self.verified else "NOT verified") + (
+            "" if self.physical else ", a contact pulls")
+
+    def to_json(self, indent: int | None = 2) -> str:
+        """:meth:`to_dict` as JSON text (no NaN: a non-finite number is null)."""
+        return json.dumps(self.to_dict(), indent=indent, allow_nan=False)
+
+
+def claim_warnings(solution: Solution, verified: bool) -> list[str]:
+    """A solver that claimed success where the check fails: the line that says so."""
+    if solution.claimed_success and not verified:
+        return [f"{solution.solver} reported {solution.status!r} but the check failed"]
+    return []
+
+
 @dataclass(frozen=True, eq=False)
-class Result:
+class Result(Reported):
     """Everything one solve found, in physical words, with its independent check.
 
     Attributes
@@ -109,18 +135,9 @@ class Result:
         """The scene's numbering and arrays (:class:`~contactqp.model.Layout`)."""
         return self.model.layout
 
-    @property
-    def label(self) -> str:
-        """method (and solver where it says more), e.g. 'penalty' or 'qp/osqp'."""
-        return self.method if self.solver == self.method else f"{self.method}/{self.solver}"
-
     def __repr__(self) -> str:
         """One line: method, contact, verdict, the largest contact force."""
         return f"<Result {self.label}, {self.contact} contact, {self._verdict()}, {self._largest()}>"
-
-    def _verdict(self) -> str:
-        return ("verified" if self.verified else "NOT verified") + (
-            "" if self.physical else ", a contact pulls")
 
     def _largest(self) -> str:
         """'largest contact force 175870.4536 N on wall[0]' (or 'no contacts')."""
@@ -217,10 +234,6 @@ class Result:
             "warnings": list(self.warnings), "info": plain(self.info),
         }
 
-    def to_json(self, indent: int | None = 2) -> str:
-        """:meth:`to_dict` as JSON text (no NaN: a non-finite number is null)."""
-        return json.dumps(self.to_dict(), indent=indent, allow_nan=False)
-
 
 def plain(value: Any) -> Any:
     """numpy → Python, non-finite floats → None (JSON has no NaN): every JSON contactqp writes
@@ -289,8 +302,7 @@ def make_result(model: Model, solution: Solution, *, method: str, contact: str,
     ratio, warnings = yield_warning(layout, stress)
     found = check(model, u, lam, reactions, contact, tolerances, element_force=forces)
     timings = {**timings, "check": time.perf_counter() - start}
-    if solution.claimed_success and not found.verified:
-        warnings.append(f"{solution.solver} reported {solution.status!r} but the check failed")
+    warnings += claim_warnings(solution, found.verified)
     return Result(
         model=model, method=method, solver=solution.solver, contact=contact,
         options=dict(options), u=u, contact_force=lam, reactions=reactions,
@@ -306,4 +318,5 @@ def make_result(model: Model, solution: Solution, *, method: str, contact: str,
     )
 
 
-__all__ = ["Result", "Solution", "make_result", "plain", "support_reactions"]
+__all__ = ["Reported", "Result", "Solution", "claim_warnings", "make_result", "plain",
+           "support_reactions"]
