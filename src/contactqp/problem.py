@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -92,10 +93,13 @@ class Problem:
         """Number of contact rows."""
         return int(self.g.size)
 
-    @property
+    @cached_property
     def equality(self) -> np.ndarray:
-        """Per row, True where it is an equality row."""
-        return np.array([kind == "equality" for kind in self.kinds], dtype=bool)
+        """Per row, True where it is an equality row (read-only; worked out once, since the
+        active-set loops read it every step)."""
+        rows = np.array([kind == "equality" for kind in self.kinds], dtype=bool)
+        rows.flags.writeable = False
+        return rows
 
     def __repr__(self) -> str:
         return (f"<Problem {self.name or 'unnamed'}: {self.n} dofs, {self.m} contact rows, "
