@@ -25,8 +25,8 @@ def opposed_forces(layout: Layout, lam: np.ndarray) -> float:
         plus = np.bincount(up_nodes, force[up_rows], minlength=layout.n_nodes)
         minus = np.bincount(down_nodes, force[down_rows], minlength=layout.n_nodes)
         common = largest(np.minimum(plus, minus))
-    for cycle in layout.tight_cycles:  # loops through bar contacts (Layout.tight_cycles)
-        common = max(common, float(force[list(cycle)].min()))
+    # a loop whose gaps sum to zero (Layout.tight_cycles) is one of the loops that
+    # round_the_loops finds: its weakest row carries at least that loop's smallest force
     return max(common, round_the_loops(layout, force))
 
 
