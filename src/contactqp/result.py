@@ -269,7 +269,8 @@ def yield_warning(layout: Layout, stress: np.ndarray) -> tuple[float | None, lis
     yield_stress = layout.yield_stress
     if yield_stress is None:
         return None, []
-    ratio = float(np.fmax.reduce(np.abs(stress) / yield_stress))
+    ratios = np.abs(stress)
+    ratio = float(np.fmax.reduce(np.divide(ratios, yield_stress, out=ratios)))
     if not ratio > 1.0:
         return ratio, []
     scene = layout.scene

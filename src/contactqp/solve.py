@@ -17,7 +17,7 @@ from contactqp.errors import OptionError, SceneError
 from contactqp.feasibility import equality_conflict
 from contactqp.held import unheld_bars
 from contactqp.methods import Method, checked_options, hull
-from contactqp.model import Condensed, Model, condense, scene_model
+from contactqp.model import Condensed, Model, condensed_model, scene_model
 from contactqp.problem import Problem
 from contactqp.problem_result import ProblemResult
 from contactqp.problem_solve import solve_problem
@@ -173,7 +173,7 @@ def solve_model(model: Model, spec: Method, contact: str, formulation: str,
         return spec.solve(model, contact, formulation="strain", **options)
     if formulation != "condensed":
         return spec.solve(model, contact, **options)
-    condensed = condense(model) if condensed is None else condensed
+    condensed = condensed_model(model) if condensed is None else condensed
     if condensed.n_free:
         solution = spec.solve(condensed, contact, **options)
     else:  # no contacts: nothing left to solve, u = K⁻¹P

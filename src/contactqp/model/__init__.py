@@ -39,11 +39,11 @@ from contactqp.model.chain import (
     wall_stiffness,
     without_circulation,
 )
-from contactqp.model.condense import Condensed, condense
+from contactqp.model.condense import Condensed, condense, condensed_model
 
 __all__ = [
     "Condensed", "ContactRows", "Layout", "Model", "bar_groups", "build_model", "condense",
-    "contact_forces_on_nodes", "count_up_to", "determinate_chain_solve",
+    "condensed_model", "contact_forces_on_nodes", "count_up_to", "determinate_chain_solve",
     "displacement_scale", "displacement_scale_rule", "element_forces", "elongation_rows",
     "force_scale_rule", "in_set", "largest",
     "link_forces", "load_force_scale", "load_force_terms", "node_set", "penetration", "run_ends", "run_starts",

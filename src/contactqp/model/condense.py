@@ -95,16 +95,28 @@ class Condensed:
         push = self.C.T @ np.asarray(contact_force, dtype=float)
         moved = self.solve_K(push)
         layout, full = self.layout, self.full
-        anchors = node_set(layout.n_nodes, layout.support_nodes, full.free[self.nodes])
-        values = np.zeros(layout.n_nodes)
-        values[full.free[self.nodes]] = moved
-        return self.u0 - spread(layout, anchors, values[anchors])[full.free]
+        kept = full.free[self.nodes]
+        anchors = node_set(layout.n_nodes, layout.support_nodes, kept)
+        values = np.zeros(anchors.size)  # 0 at the supports
+        values[np.searchsorted(anchors, kept)] = moved
+        # u0 − the spread at the free nodes, in the one new array the free nodes need
+        u = spread(layout, anchors, values)[full.free]
+        return np.subtract(self.u0, u, out=u)
 
     def scaled(self, factor: float) -> Condensed:
         """The same problem with every load times ``factor`` (a step of a load path: the
         condensed chain is reused)."""
         return Condensed(self.full, self.nodes, self.band, factor * self.P, self.C,
                          factor * self.u0, factor * self.load_factor)
+
+
+def condensed_model(model: Model) -> Condensed:
+    """:func:`condense` of ``model``, made once and kept on it (a scene keeps its model, so a
+    scene solved again in the condensed formulation is condensed once)."""
+    kept = model.__dict__.get("condensed")
+    if kept is None:
+        kept = model.__dict__["condensed"] = condense(model)
+    return kept
 
 
 def condense(model: Model) -> Condensed:
@@ -143,4 +155,4 @@ def condense(model: Model) -> Condensed:
     return Condensed(model, nodes, band, load, reduced_C, u0)
 
 
-__all__ = ["Condensed", "condense"]
+__all__ = ["Condensed", "condense", "condensed_model"]
