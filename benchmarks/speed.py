@@ -13,6 +13,10 @@
     solve_many 10⁴    10⁴ cases varying the load and the gap against a vectorised numpy version
 
 Every row gives the method's, the check's and the build's time apart (Result.timings).
+Warm rows drop each run's Result before the next, as the floor drops its arrays: on this
+machine a fresh page from the OS costs ~26 µs (a new 8 MB array 13 ms, against 0.4 ms for
+one reused), so holding every Result of a 10⁶-element run made its solve 97 ms instead of
+35-48 ms. The first-solve rows pay those pages, as a user's first solve does.
 Writes speed.json.
 """
 
@@ -23,6 +27,7 @@ import math
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -47,12 +52,12 @@ print(imported - start, built - imported, done - built)
 """
 
 
-def _split(result: contactqp.Result) -> dict[str, float]:
+def _split(result: contactqp.Result | _Timed) -> dict[str, float]:
     return {name: result.timings.get(name, 0.0) for name in ("build", "solve", "check")}
 
 
 def _row(name: str, seconds: float, base: float, against: str, goal: float,
-         result: contactqp.Result | None = None, **extra: object) -> dict:
+         result: contactqp.Result | _Timed | None = None, **extra: object) -> dict:
     row = {"run": name, "seconds": seconds, "ratio": seconds / base, "against": against,
            "goal": goal, **extra}
     if result is not None:
@@ -62,19 +67,37 @@ def _row(name: str, seconds: float, base: float, against: str, goal: float,
 
 
 def _timed_solve(scene: contactqp.Scene, repeats: int, **options: object
-                 ) -> tuple[float, contactqp.Result]:
-    results = []
+                 ) -> tuple[float, _Timed]:
+    """The median time of ``solve(scene)`` and the Result of the median run. Each run's Result
+    is dropped before the next (its timings kept), as the floor drops its arrays: holding
+    every Result of 10⁶ nodes made each run's arrays fresh pages from the OS, and a fresh page
+    costs ~26 µs on this machine (one new 8 MB array: 13 ms, against 0.4 ms reused), which
+    doubled the 10⁶ figures (module docstring)."""
+    runs: list[_Timed] = []
+    last: list[contactqp.Result] = []
 
     def once() -> None:
-        results.append(contactqp.solve(scene, **options))
+        result = contactqp.solve(scene, **options)
+        last[:] = [result]
+        runs.append(_Timed(result.time, dict(result.timings), result.verified,
+                           result.message))
 
     seconds = median_time(once, repeats)
-    last = results[-1]
-    if not last.verified:
-        raise SystemExit(f"{scene.name}: not verified ({last.message})")
-    # the split of the median run: the Result whose total is the median
-    middle = sorted(results[1:], key=lambda r: r.time)[len(results[1:]) // 2]
+    if not last[0].verified:
+        raise SystemExit(f"{scene.name}: not verified ({last[0].message})")
+    # the split of the median run: the run whose total is the median
+    middle = sorted(runs[1:], key=lambda r: r.time)[len(runs[1:]) // 2]
     return seconds, middle
+
+
+@dataclass(frozen=True)
+class _Timed:
+    """What the table reads from one run's Result, without its arrays."""
+
+    time: float
+    timings: dict[str, float]
+    verified: bool
+    message: str
 
 
 def long_bar(quick: bool) -> list[dict]:
