@@ -37,7 +37,7 @@ from contactqp.methods import cases as many
 from contactqp.model import Model, displacement_scale_rule, force_scale_rule, load_force_terms
 from contactqp.progress import Progress
 from contactqp.result import Result, Solution, make_result
-from contactqp.scene import Scene
+from contactqp.scene import Scene, Walls
 
 if TYPE_CHECKING:
     from contactqp.prepared import Prepared
@@ -48,15 +48,17 @@ SPARE = 0.999  # a case verified together has its residuals within this × the t
 def tiled_scene(scene: Scene, cases: int) -> Scene:
     """``scene`` repeated ``cases`` times as one scene: the copies' bars one after another, each
     copy's supports, loads, walls and bar contacts on its own bars (all the copies' walls, then
-    all their bar contacts, case after case)."""
+    all their bar contacts, case after case). The walls are one :class:`Walls` (read as arrays,
+    their gaps given anew for each batch with no object per wall)."""
     n = len(scene.bars)
 
     def moved(items: tuple, *names: str) -> tuple:
         return tuple(replace(item, **{name: getattr(item, name) + case * n for name in names})
                      for case in range(cases) for item in items)
 
+    walls = Walls.of(scene.walls).tiled(cases, n) if scene.walls else ()
     return Scene(scene.bars * cases, moved(scene.supports, "bar"), moved(scene.loads, "bar"),
-                 moved(scene.walls, "bar"), name=f"{scene.name} x {cases} cases",
+                 walls, name=f"{scene.name} x {cases} cases",
                  distributed=moved(scene.distributed, "bar"),
                  contacts=moved(scene.contacts, "bar_a", "bar_b"), units=scene.units)
 
@@ -163,8 +165,10 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
     tiled_loads, tiled_gaps = tiled_values(scene, _values(loads, prepared.scene_loads, cases),
                                            _values(gaps, prepared.model.g, cases))
     try:
+        # the loads' forces stay an array: the model and the check read them as one
         batch_scene = tiled.scene.with_values(None if loads is None else tiled_loads,
-                                              None if gaps is None else tiled_gaps)
+                                              None if gaps is None else tiled_gaps,
+                                              load_objects=False)
     except ContactqpError:  # bad values: say which case, as the case alone says it
         for case in range(cases):
             _case_scene(prepared, loads, gaps, case)

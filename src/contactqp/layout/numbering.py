@@ -379,7 +379,7 @@ class Layout:
     def nodal_loads(self) -> np.ndarray:
         """The point loads and the distributed loads' nodal forces summed per global node (N)."""
         p = self.distributed_nodal_loads.copy()
-        np.add.at(p, self.load_nodes, np.array([q.force for q in self.scene.loads], dtype=float))
+        np.add.at(p, self.load_nodes, self.scene.load_forces)
         return _read_only(p)
 
     def load_point(self) -> int:

@@ -7,6 +7,7 @@ determine the contact forces); :func:`row_names`, how messages name its contact 
 from __future__ import annotations
 
 import copy
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
@@ -84,6 +85,8 @@ class Scene:
     units: str = "SI"
 
     def __post_init__(self) -> None:
+        if isinstance(self.loads, ValuedLoads):  # a batch's scene, made again (replace)
+            object.__setattr__(self, "loads", self.loads.items)
         for key, kind, plural in (("bars", Bar, "bar"), ("supports", Support, "support"),
                                   ("loads", Load, "load"),
                                   ("distributed", DistributedLoad, "distributed_load"),
@@ -145,20 +148,25 @@ class Scene:
         """The same scene with other walls (Wall objects, a :class:`Walls`, or both)."""
         return replace(self, walls=walls if isinstance(walls, Walls) else tuple(walls))
 
-    def with_values(self, loads: Any = None, gaps: Any = None) -> Scene:
+    def with_values(self, loads: Any = None, gaps: Any = None, *,
+                    load_objects: bool = True) -> Scene:
         """The same scene with other load values and gaps, everything else kept: ``loads``
         one per point load (force) then one per distributed load (force per length), in
         scene order; ``gaps`` one per contact row (the walls, then the bar contacts); in the
         scene's units; None keeps them. The new scene is checked as any scene is (gaps that
         leave a node no position are refused); its layout shares every array that does not
-        depend on the values with this scene's (:meth:`Layout.with_values`)."""
-        changes: dict[str, tuple] = {}
+        depend on the values with this scene's (:meth:`Layout.with_values`).
+        ``load_objects=False`` keeps the point loads' forces as an array, their Load objects
+        made only when they are read one by one (:attr:`load_forces` reads the array): for a
+        batch's scene of many cases (:mod:`contactqp.batch`)."""
+        changes: dict[str, Any] = {}
         if loads is not None:
             n_point = len(self.loads)
             values = value_array("loads", loads, (n_point + len(self.distributed),),
                                  "one per point load, then one per distributed load",
                                  OptionError)
-            changes["loads"] = _valued(self.loads, "force", values[:n_point])
+            changes["loads"] = (_valued(self.loads, "force", values[:n_point]) if load_objects
+                                else ValuedLoads(tuple(self.loads), values[:n_point]))
             changes["distributed"] = _valued(self.distributed, "intensity", values[n_point:])
         if gaps is not None:
             n_walls = len(self.walls)
@@ -177,12 +185,81 @@ class Scene:
         for name, value in changes.items():
             object.__setattr__(scene, name, value)
         if gaps is not None:
-            conflict = _conflict(scene)
+            conflict = _conflict(scene, self)
             if conflict:
                 raise SceneError(conflict)
         if "layout" in self.__dict__:
             scene.__dict__["layout"] = self.layout.with_values(scene)
         return scene
+
+    @property
+    def load_forces(self) -> np.ndarray:
+        """The point loads' forces in scene order, as an array (force)."""
+        if isinstance(self.loads, ValuedLoads):
+            return self.loads.forces
+        return np.fromiter((p.force for p in self.loads), float, len(self.loads))
+
+    @cached_property
+    def _opposed_walls(self) -> tuple[np.ndarray, np.ndarray]:
+        """The walls that share a node with a wall on its other side, as two arrays of rows
+        paired (the earlier row first). Where the walls sit is all it reads: a scene made by
+        :meth:`with_values` shares its scene's (:func:`_conflict`)."""
+        walls = Walls.of(self.walls)
+        offsets = np.concatenate(([0], np.cumsum([b.n_nodes for b in self.bars])))
+        at = offsets[walls.bars] + walls.nodes
+        # one wall per node and side (checked before): two walls at a node are one each side
+        order = np.argsort(at, kind="stable")
+        pair = np.flatnonzero(at[order][1:] == at[order][:-1])
+        return order[pair], order[pair + 1]
+
+
+class ValuedLoads(Sequence):
+    """A scene's point loads with other forces (:meth:`Scene.with_values` with
+    ``load_objects=False``): the forces kept as an array, and read as a sequence of
+    :class:`Load` (as the tuple of them would read) with the objects made on first use.
+
+    Parameters
+    ----------
+    loads : tuple of Load
+        The scene's point loads, already checked (where each sits).
+    forces : numpy.ndarray
+        One checked force per load, in order.
+    """
+
+    def __init__(self, loads: tuple[Load, ...], forces: np.ndarray) -> None:
+        self.loads = loads
+        self.forces = np.array(forces, dtype=float)
+        self.forces.flags.writeable = False
+
+    @cached_property
+    def items(self) -> tuple[Load, ...]:
+        """The loads as Load objects, in order (made on first use)."""
+        return _valued(self.loads, "force", self.forces)
+
+    def __len__(self) -> int:
+        return len(self.loads)
+
+    def __getitem__(self, index: Any) -> Any:
+        return self.items[index]
+
+    def __iter__(self):
+        return iter(self.items)
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, (ValuedLoads, tuple)):
+            return self.items == tuple(other)
+        return NotImplemented
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __add__(self, other: Any) -> tuple:
+        return self.items + tuple(other)
+
+    def __radd__(self, other: Any) -> tuple:
+        return tuple(other) + self.items
+
+    def __repr__(self) -> str:
+        return repr(self.items)
 
 
 def row_names(scene: Scene) -> list[str]:
@@ -205,21 +282,20 @@ def _valued(items: tuple, name: str, values: np.ndarray) -> tuple:
     return tuple(made)
 
 
-def _conflict(scene: Scene) -> str:
+def _conflict(scene: Scene, placed: Scene | None = None) -> str:
     """:func:`impossible_constraints`, then :func:`indeterminate_contacts`: why the scene's
     constraints leave a node no position or its contact forces undetermined, or "". A
     scene without bar contacts is first checked in numpy passes: with walls alone the only
     conflict is a node whose two walls' gaps sum below 0 (a wall repeating another is refused
-    before); the graph, a Python object and a text per wall, is made only to name it."""
+    before); the graph, a Python object and a text per wall, is made only to name it.
+    ``placed``: a scene whose walls sit where ``scene``'s do (:meth:`Scene.with_values`), whose
+    pairs of opposed walls are kept (made once for all its values)."""
     # the numpy passes cost ~50 µs, the graph ~4 µs a wall: a few Wall objects go to the graph
     if not scene.contacts and (isinstance(scene.walls, Walls) or len(scene.walls) > 16):
-        walls, n_nodes = Walls.of(scene.walls), sum(b.n_nodes for b in scene.bars)
-        offsets = np.concatenate(([0], np.cumsum([b.n_nodes for b in scene.bars])))
-        at = offsets[walls.bars] + walls.nodes
-        # at a node with a wall on each side, the room between them: its + and − gaps summed
-        room = np.bincount(at, walls.gaps, minlength=n_nodes)
-        both = np.bincount(at, minlength=n_nodes) == 2
-        if not (both & (room < 0.0)).any():
+        first, second = (scene if placed is None else placed)._opposed_walls
+        gaps = Walls.of(scene.walls).gaps
+        # at a node with a wall on each side, the room between them: the two gaps summed
+        if not (gaps[first] + gaps[second] < 0.0).any():
             return ""
     return impossible_constraints(scene) or indeterminate_contacts(scene)
 

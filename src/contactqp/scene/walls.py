@@ -192,6 +192,13 @@ class Walls:
         made.__dict__["gaps"] = _read_only(np.array(gaps, dtype=float))
         return made
 
+    def tiled(self, copies: int, bars: int) -> Walls:
+        """These walls repeated ``copies`` times, one copy after another, copy c on the bars
+        ``c·bars`` further on (a batch's scene: :func:`contactqp.batch.tiled_scene`)."""
+        shift = bars * np.arange(copies, dtype=np.intp)[:, None]
+        return self._made(np.tile(self.nodes, copies), np.tile(self.gaps, copies),
+                          np.tile(self.sides, copies), (self.bars + shift).ravel(), self.name)
+
     @cached_property
     def signs(self) -> np.ndarray:
         """+1.0 for a wall on the + side, −1.0 for the − side: each row is sign·u <= gap."""
