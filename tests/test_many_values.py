@@ -19,6 +19,7 @@ import pytest
 import contactqp
 from closed_forms import values
 from contactqp.batch import tiled_scene
+from contactqp.methods.cases import FEW_COLUMNS, row_reduce
 from contactqp.model import build_model
 from contactqp.random_scenes import random_scene
 from contactqp.scene.scene import Scene, ValuedLoads
@@ -173,3 +174,14 @@ def test_walls_that_close_a_node_are_refused_with_the_message_of_a_fresh_scene(a
     assert "leave node 7 no position" in str(fresh.value)
     gaps[2 * nodes.index(7) + 1] = -1e-4  # the room is then 0: a touching fit, allowed
     assert contactqp.Walls.of(scene.with_values(gaps=gaps).walls).gaps[11] == -1e-4
+
+
+@pytest.mark.parametrize("columns", [1, 4, FEW_COLUMNS, FEW_COLUMNS + 1, 80])
+def test_a_row_reduced_down_a_transposed_copy_is_numpys_row_reduction(columns):
+    rng = np.random.default_rng(columns)
+    values = rng.normal(size=(50, columns))
+    values[3, columns // 2] = np.nan
+    for reduce, method in ((np.maximum, "max"), (np.minimum, "min")):
+        expected = getattr(values, method)(axis=1, initial=0.0)
+        assert np.array_equal(row_reduce(reduce, values, initial=0.0), expected, equal_nan=True)
+        assert np.isnan(row_reduce(reduce, values)[3])

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -34,7 +35,7 @@ import numpy as np
 from contactqp.check import TOLERANCES, natural_map, row_compliance_roots
 from contactqp.errors import ContactqpError, SceneError, SolverError
 from contactqp.methods import cases as many
-from contactqp.model import Model, displacement_scale_rule, force_scale_rule, load_force_terms
+from contactqp.model import Model, displacement_scale_rule, force_scale_rule
 from contactqp.progress import Progress
 from contactqp.result import Result, Solution, make_result
 from contactqp.scene import Scene, Walls
@@ -88,12 +89,12 @@ def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
     """(F, U) of every case of a tiled model, by the rules of :attr:`Model.force_scale` and
     :func:`contactqp.model.displacement_scale` (``free_displacement`` and ``gaps`` per case)."""
     layout, walls = model.layout, len(model.scene.walls) // cases
-    widest = np.abs(gaps).max(axis=1, initial=0.0)
-    U = displacement_scale_rule(np.abs(free_displacement).max(axis=1, initial=0.0),
-                                np.max(-gaps, axis=1, initial=0.0), widest,
+    largest = partial(many.row_reduce, np.maximum, initial=0.0)  # each case's largest
+    widest = largest(np.abs(gaps))
+    U = displacement_scale_rule(largest(np.abs(free_displacement)), largest(-gaps), widest,
                                 layout.longest_bar)
-    load = load_force_terms(layout).reshape(cases, -1).max(axis=1)
-    press = per_case_rows(layout.press_fit_forces, walls, cases).max(axis=1, initial=0.0)
+    load = many.row_reduce(np.maximum, layout.load_terms.reshape(cases, -1))
+    press = largest(per_case_rows(layout.press_fit_forces, walls, cases))
     F = force_scale_rule(load, press, float(layout.element_stiffness.min()), U)
     return F, U
 
@@ -192,7 +193,7 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
     verified = solved.settled & np.all(
         [residuals[name] <= SPARE * getattr(TOLERANCES, name) for name in checked
          if together.residuals[name] is not None], axis=0)
-    physical = lam.min(axis=1, initial=0.0) >= -TOLERANCES.sign * F
+    physical = many.row_reduce(np.minimum, lam, initial=0.0) >= -TOLERANCES.sign * F
     alone, failures = _alone_where_flagged(prepared, loads, gaps, solved, verified)
     batch = Batch(prepared, loads, gaps, np.array(together.u).reshape(cases, -1), lam.copy(),
                   np.array(together.reactions).reshape(cases, -1),
