@@ -111,6 +111,8 @@ def test_a_scene_tiled_by_arrays_has_the_model_of_one_tiled_by_objects(seed):
     by_arrays, by_objects = tiled_scene(scene, 3), object_tiled(scene, 3)
     assert isinstance(by_arrays.walls, contactqp.Walls) or not scene.walls
     assert by_arrays.walls == by_objects.walls
+    for name in ("bars", "supports", "loads", "distributed", "contacts", "units"):
+        assert getattr(by_arrays, name) == getattr(by_objects, name), name
     a, b = build_model(by_arrays), build_model(by_objects)
     assert np.array_equal(a.band, b.band) and np.array_equal(a.free, b.free)
     assert (a.C != b.C).nnz == 0 and a.C.shape == b.C.shape

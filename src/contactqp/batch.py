@@ -26,7 +26,7 @@ exact answer side by side, so it is checked as any scene is, by the one check
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
@@ -38,7 +38,8 @@ from contactqp.methods import cases as many
 from contactqp.model import Model, displacement_scale_rule, force_scale_rule
 from contactqp.progress import Progress
 from contactqp.result import Result, Solution, make_result
-from contactqp.scene import Scene, Walls
+from contactqp.scene import Scene
+from contactqp.scene.scene import side_by_side
 
 if TYPE_CHECKING:
     from contactqp.prepared import Prepared
@@ -47,21 +48,11 @@ SPARE = 0.999  # a case verified together has its residuals within this × the t
 
 
 def tiled_scene(scene: Scene, cases: int) -> Scene:
-    """``scene`` repeated ``cases`` times as one scene: the copies' bars one after another, each
-    copy's supports, loads, walls and bar contacts on its own bars (all the copies' walls, then
-    all their bar contacts, case after case). The walls are one :class:`Walls` (read as arrays,
-    their gaps given anew for each batch with no object per wall)."""
-    n = len(scene.bars)
-
-    def moved(items: tuple, *names: str) -> tuple:
-        return tuple(replace(item, **{name: getattr(item, name) + case * n for name in names})
-                     for case in range(cases) for item in items)
-
-    walls = Walls.of(scene.walls).tiled(cases, n) if scene.walls else ()
-    return Scene(scene.bars * cases, moved(scene.supports, "bar"), moved(scene.loads, "bar"),
-                 walls, name=f"{scene.name} x {cases} cases",
-                 distributed=moved(scene.distributed, "bar"),
-                 contacts=moved(scene.contacts, "bar_a", "bar_b"), units=scene.units)
+    """``scene`` repeated ``cases`` times as one scene
+    (:func:`contactqp.scene.scene.side_by_side`): the copies' bars one after another, each
+    copy's supports, loads, walls and bar contacts on its own bars (all the copies' walls, one
+    :class:`Walls` read as arrays, then all their bar contacts, case after case)."""
+    return side_by_side(scene, cases)
 
 
 def tiled_values(scene: Scene, loads: np.ndarray, gaps: np.ndarray) -> tuple[np.ndarray,

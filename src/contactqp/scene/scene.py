@@ -262,6 +262,37 @@ class ValuedLoads(Sequence):
         return repr(self.items)
 
 
+def side_by_side(scene: Scene, copies: int) -> Scene:
+    """``scene`` repeated ``copies`` times as one scene: the copies' bars one after another,
+    each copy's supports, loads, walls and bar contacts on its own bars (all the copies'
+    walls, one :class:`Walls`, then all their bar contacts, copy after copy). Not checked
+    again: each copy is ``scene`` (checked), on bars of its own, and nothing joins two copies;
+    the caller keeps the copies' elements within :data:`MAX_ELEMENTS`."""
+    n = len(scene.bars)
+
+    def moved(items: Any, *names: str) -> tuple:
+        made = []
+        for copy_ in range(copies):
+            for item in items:  # a copy field by field, as _valued makes them
+                shifted = object.__new__(type(item))
+                shifted.__dict__.update(item.__dict__)
+                for name in names:
+                    shifted.__dict__[name] = getattr(item, name) + copy_ * n
+                made.append(shifted)
+        return tuple(made)
+
+    tiled = object.__new__(Scene)
+    for name, value in (
+            ("bars", scene.bars * copies), ("supports", moved(scene.supports, "bar")),
+            ("loads", moved(scene.loads, "bar")),
+            ("walls", Walls.of(scene.walls).tiled(copies, n) if scene.walls else ()),
+            ("name", f"{scene.name} x {copies} cases"),
+            ("distributed", moved(scene.distributed, "bar")),
+            ("contacts", moved(scene.contacts, "bar_a", "bar_b")), ("units", scene.units)):
+        object.__setattr__(tiled, name, value)
+    return tiled
+
+
 def row_names(scene: Scene) -> list[str]:
     """The name of each contact row as the scene file and the messages name it: wall[i] for
     the walls, then contact[j] for the bar contacts."""
