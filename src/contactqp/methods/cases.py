@@ -91,23 +91,25 @@ def solve_cases(model: Model, contact: str, loads: np.ndarray, gaps: np.ndarray,
     for _ in range(limit):
         if open_cases.size == 0:
             break
-        now = active[open_cases]
-        forces, singular = _held_forces(W, soft, q[open_cases], now)
-        lam[open_cases] = forces
-        steps[open_cases] += 1
-        u = u_free[open_cases] - forces @ flexibility_columns.T
-        penetration = q[open_cases] - forces @ W  # C u − g
+        # every case still open (as a batch often starts): views, not copies of every array
+        pick = slice(None) if open_cases.size == cases else open_cases
+        now = active[pick]
+        forces, singular = _held_forces(W, soft, q[pick], now)
+        lam[pick] = forces
+        steps[pick] += 1
+        u = u_free[pick] - forces @ flexibility_columns.T
+        penetration = q[pick] - forces @ W  # C u − g
         disp_tol = DECISION_RTOL * np.maximum(row_reduce(np.maximum, np.abs(u), initial=0.0),
-                                              floor[open_cases])[:, None]
+                                              floor[pick])[:, None]
         if penalty is None:
             force_tol = DECISION_RTOL * np.maximum(
-                load_size[open_cases], row_reduce(np.maximum, np.abs(forces), initial=0.0))[:, None]
+                load_size[pick], row_reduce(np.maximum, np.abs(forces), initial=0.0))[:, None]
             following = (now & (forces > -force_tol)) | (~now & (penetration > disp_tol))
         else:
             following = np.where(now, penetration > -disp_tol, penetration > disp_tol)
         still = (following != now).any(axis=1) & ~singular
         settled[open_cases[~still & ~singular]] = True
-        active[open_cases] = following
+        active[pick] = following
         open_cases = open_cases[still]
     u = u_free - lam @ flexibility_columns.T
     return CasesSolution(u, lam, steps, settled, u_free)
