@@ -157,16 +157,18 @@ def test_bad_values_kept_as_an_array_are_refused_as_objects_are():
 
 
 @pytest.mark.parametrize("as_walls", [True, False])
-def test_walls_that_close_a_node_are_refused_with_the_message_of_a_fresh_scene(as_walls):
-    """More than 16 walls (the numpy passes), a wall on each side of nodes 2..10: gaps that
-    sum below zero at node 7 are refused, with the message a scene built anew gives."""
+@pytest.mark.parametrize("nodes", [[7], list(range(2, 11))], ids=["2 walls", "18 walls"])
+def test_walls_that_close_a_node_are_refused_with_the_message_of_a_fresh_scene(as_walls, nodes):
+    """A wall on each side of one node, or of nodes 2..10 (more than 16 walls, which a new
+    scene checks in numpy passes): gaps that sum below zero at node 7 are refused, with the
+    message a scene built anew gives; gaps that sum to zero are not."""
     bar = contactqp.Bar.from_areas([1e-4] * 12, 2e11, length=1.2)
-    nodes = list(range(2, 11))
     walls = [contactqp.Wall(n, 1e-4, side) for n in nodes for side in "+-"]
     scene = contactqp.Scene(bar, (contactqp.Support(0),), (contactqp.Load(12, 1e3),),
                             contactqp.Walls.of(walls) if as_walls else walls)
     gaps = np.full(len(walls), 1e-4)
-    gaps[2 * nodes.index(7) + 1] = -3e-4
+    closing = 2 * nodes.index(7) + 1
+    gaps[closing] = -3e-4
     with pytest.raises(contactqp.SceneError) as fresh:
         contactqp.Scene(bar, scene.supports, scene.loads,
                         [replace(w, gap=float(g)) for w, g in zip(walls, gaps)])
@@ -174,8 +176,8 @@ def test_walls_that_close_a_node_are_refused_with_the_message_of_a_fresh_scene(a
         scene.with_values(gaps=gaps)
     assert str(valued.value) == str(fresh.value)
     assert "leave node 7 no position" in str(fresh.value)
-    gaps[2 * nodes.index(7) + 1] = -1e-4  # the room is then 0: a touching fit, allowed
-    assert contactqp.Walls.of(scene.with_values(gaps=gaps).walls).gaps[11] == -1e-4
+    gaps[closing] = -1e-4  # the room is then 0: a touching fit, allowed
+    assert contactqp.Walls.of(scene.with_values(gaps=gaps).walls).gaps[closing] == -1e-4
 
 
 @pytest.mark.parametrize("columns", [1, 4, FEW_COLUMNS, FEW_COLUMNS + 1, 80])

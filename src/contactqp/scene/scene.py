@@ -321,10 +321,13 @@ def _conflict(scene: Scene, placed: Scene | None = None) -> str:
     before); the graph, a Python object and a text per wall, is made only to name it.
     ``placed``: a scene whose walls sit where ``scene``'s do (:meth:`Scene.with_values`), whose
     pairs of opposed walls are kept (made once for all its values)."""
-    # the numpy passes cost ~50 µs, the graph ~4 µs a wall: a few Wall objects go to the graph
-    if not scene.contacts and (isinstance(scene.walls, Walls) or len(scene.walls) > 16):
+    walls = scene.walls
+    # finding the pairs costs ~50 µs, the graph ~4 µs a wall: in a new scene a few Wall
+    # objects go to the graph; with the pairs kept, the test costs a few µs
+    if not scene.contacts and (placed is not None or isinstance(walls, Walls) or len(walls) > 16):
         first, second = (scene if placed is None else placed)._opposed_walls
-        gaps = Walls.of(scene.walls).gaps
+        gaps = (walls.gaps if isinstance(walls, Walls)
+                else np.fromiter((w.gap for w in walls), float, len(walls)))
         # at a node with a wall on each side, the room between them: the two gaps summed
         if not (gaps[first] + gaps[second] < 0.0).any():
             return ""
