@@ -34,7 +34,7 @@ from contactqp.scene.validation import (
     _numbering,
     check_wall_fields,
 )
-from contactqp.scene.walls import Walls
+from contactqp.scene.walls import ReadAsItems, Walls
 from contactqp.units import UNIT_SYSTEMS, Units
 from contactqp.values import number, one_of, text, value_array
 
@@ -213,7 +213,7 @@ class Scene:
         return order[pair], order[pair + 1]
 
 
-class ValuedLoads(Sequence):
+class ValuedLoads(ReadAsItems, Sequence):
     """A scene's point loads with other forces (:meth:`Scene.with_values` with
     ``load_objects=False``): the forces kept as an array, and read as a sequence of
     :class:`Load` (as the tuple of them would read) with the objects made on first use.
@@ -239,24 +239,10 @@ class ValuedLoads(Sequence):
     def __len__(self) -> int:
         return len(self.loads)
 
-    def __getitem__(self, index: Any) -> Any:
-        return self.items[index]
-
-    def __iter__(self):
-        return iter(self.items)
-
     def __eq__(self, other: object) -> bool:
         if isinstance(other, (ValuedLoads, tuple)):
             return self.items == tuple(other)
         return NotImplemented
-
-    __hash__ = None  # type: ignore[assignment]
-
-    def __add__(self, other: Any) -> tuple:
-        return self.items + tuple(other)
-
-    def __radd__(self, other: Any) -> tuple:
-        return tuple(other) + self.items
 
     def __repr__(self) -> str:
         return repr(self.items)
