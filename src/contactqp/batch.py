@@ -26,7 +26,8 @@ exact answer side by side, so it is checked as any scene is, by the one check
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -34,10 +35,11 @@ import numpy as np
 from contactqp.check import TOLERANCES, natural_map, row_compliance_roots
 from contactqp.errors import ContactqpError, SceneError, SolverError
 from contactqp.methods import cases as many
-from contactqp.model import Model, displacement_scale_rule, force_scale_rule, load_force_terms
+from contactqp.model import Model, displacement_scale_rule, force_scale_rule
 from contactqp.progress import Progress
 from contactqp.result import Result, Solution, make_result
 from contactqp.scene import Scene
+from contactqp.scene.scene import side_by_side
 
 if TYPE_CHECKING:
     from contactqp.prepared import Prepared
@@ -46,19 +48,11 @@ SPARE = 0.999  # a case verified together has its residuals within this × the t
 
 
 def tiled_scene(scene: Scene, cases: int) -> Scene:
-    """``scene`` repeated ``cases`` times as one scene: the copies' bars one after another, each
-    copy's supports, loads, walls and bar contacts on its own bars (all the copies' walls, then
-    all their bar contacts, case after case)."""
-    n = len(scene.bars)
-
-    def moved(items: tuple, *names: str) -> tuple:
-        return tuple(replace(item, **{name: getattr(item, name) + case * n for name in names})
-                     for case in range(cases) for item in items)
-
-    return Scene(scene.bars * cases, moved(scene.supports, "bar"), moved(scene.loads, "bar"),
-                 moved(scene.walls, "bar"), name=f"{scene.name} x {cases} cases",
-                 distributed=moved(scene.distributed, "bar"),
-                 contacts=moved(scene.contacts, "bar_a", "bar_b"), units=scene.units)
+    """``scene`` repeated ``cases`` times as one scene
+    (:func:`contactqp.scene.scene.side_by_side`): the copies' bars one after another, each
+    copy's supports, loads, walls and bar contacts on its own bars (all the copies' walls, one
+    :class:`Walls` read as arrays, then all their bar contacts, case after case)."""
+    return side_by_side(scene, cases)
 
 
 def tiled_values(scene: Scene, loads: np.ndarray, gaps: np.ndarray) -> tuple[np.ndarray,
@@ -86,12 +80,12 @@ def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
     """(F, U) of every case of a tiled model, by the rules of :attr:`Model.force_scale` and
     :func:`contactqp.model.displacement_scale` (``free_displacement`` and ``gaps`` per case)."""
     layout, walls = model.layout, len(model.scene.walls) // cases
-    widest = np.abs(gaps).max(axis=1, initial=0.0)
-    U = displacement_scale_rule(np.abs(free_displacement).max(axis=1, initial=0.0),
-                                np.max(-gaps, axis=1, initial=0.0), widest,
+    largest = partial(many.row_reduce, np.maximum, initial=0.0)  # each case's largest
+    widest = largest(np.abs(gaps))
+    U = displacement_scale_rule(largest(np.abs(free_displacement)), largest(-gaps), widest,
                                 layout.longest_bar)
-    load = load_force_terms(layout).reshape(cases, -1).max(axis=1)
-    press = per_case_rows(layout.press_fit_forces, walls, cases).max(axis=1, initial=0.0)
+    load = many.row_reduce(np.maximum, layout.load_terms.reshape(cases, -1))
+    press = largest(per_case_rows(layout.press_fit_forces, walls, cases))
     F = force_scale_rule(load, press, float(layout.element_stiffness.min()), U)
     return F, U
 
@@ -163,8 +157,10 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
     tiled_loads, tiled_gaps = tiled_values(scene, _values(loads, prepared.scene_loads, cases),
                                            _values(gaps, prepared.model.g, cases))
     try:
+        # the loads' forces stay an array: the model and the check read them as one
         batch_scene = tiled.scene.with_values(None if loads is None else tiled_loads,
-                                              None if gaps is None else tiled_gaps)
+                                              None if gaps is None else tiled_gaps,
+                                              load_objects=False)
     except ContactqpError:  # bad values: say which case, as the case alone says it
         for case in range(cases):
             _case_scene(prepared, loads, gaps, case)
@@ -188,7 +184,7 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
     verified = solved.settled & np.all(
         [residuals[name] <= SPARE * getattr(TOLERANCES, name) for name in checked
          if together.residuals[name] is not None], axis=0)
-    physical = lam.min(axis=1, initial=0.0) >= -TOLERANCES.sign * F
+    physical = many.row_reduce(np.minimum, lam, initial=0.0) >= -TOLERANCES.sign * F
     alone, failures = _alone_where_flagged(prepared, loads, gaps, solved, verified)
     batch = Batch(prepared, loads, gaps, np.array(together.u).reshape(cases, -1), lam.copy(),
                   np.array(together.reactions).reshape(cases, -1),

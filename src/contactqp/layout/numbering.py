@@ -21,7 +21,13 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from contactqp.feasibility import tight_cycles
-from contactqp.layout.derived import _read_only, load_force_scale, seen_stiffness, wall_arrays
+from contactqp.layout.derived import (
+    _read_only,
+    largest,
+    load_force_terms,
+    seen_stiffness,
+    wall_arrays,
+)
 
 if TYPE_CHECKING:  # a Scene makes its layout: the layout reads it, never imports it
     from contactqp.scene import Scene
@@ -184,8 +190,13 @@ class Layout:
 
     @cached_property
     def load_scale(self) -> float:
-        """:func:`load_force_scale`, once per scene."""
-        return load_force_scale(self)
+        """:func:`load_force_scale`, once per scene (from :attr:`load_terms`)."""
+        return largest(self.load_terms)
+
+    @cached_property
+    def load_terms(self) -> np.ndarray:
+        """:func:`load_force_terms`, once per scene: a batch reads them case by case."""
+        return _read_only(load_force_terms(self))
 
     @cached_property
     def press_fit_force(self) -> float:
@@ -379,7 +390,7 @@ class Layout:
     def nodal_loads(self) -> np.ndarray:
         """The point loads and the distributed loads' nodal forces summed per global node (N)."""
         p = self.distributed_nodal_loads.copy()
-        np.add.at(p, self.load_nodes, np.array([q.force for q in self.scene.loads], dtype=float))
+        np.add.at(p, self.load_nodes, self.scene.load_forces)
         return _read_only(p)
 
     def load_point(self) -> int:

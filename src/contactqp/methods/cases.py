@@ -28,6 +28,17 @@ from contactqp.model import Model
 CASES_ROWS = 64  # contact rows up to which the cases are solved together (W is rows x rows;
 # a case's set of held rows is one 64-bit key)
 CASES_ENTRIES = 2**22  # ... and free nodes x rows, the dense K⁻¹Cᵀ it builds (32 MB)
+FEW_COLUMNS = 32  # up to this many columns, numpy reduces a row faster down a transposed copy
+# (measured: 10⁴ x 4, 0.03 ms against 0.4 ms along the short rows; even at 32 columns)
+
+
+def row_reduce(reduce: np.ufunc, values: np.ndarray, **initial: float) -> np.ndarray:
+    """``reduce.reduce(values, axis=1, **initial)`` (np.maximum or np.minimum: the same
+    numbers in any order): for a few columns, down the columns of a transposed copy, since
+    numpy reduces along short rows one row at a time."""
+    if values.shape[1] <= FEW_COLUMNS:
+        return reduce.reduce(np.ascontiguousarray(values.T), axis=0, **initial)
+    return reduce.reduce(values, axis=1, **initial)
 
 
 def fits(model: Model) -> bool:
@@ -68,8 +79,8 @@ def solve_cases(model: Model, contact: str, loads: np.ndarray, gaps: np.ndarray,
         return CasesSolution(u_free - lam @ flexibility_columns.T, lam, np.ones(cases, int),
                              ~singular, u_free)
     # the single-case loops' tolerances (contactqp.methods._active_set), per case
-    load_size = np.abs(loads).max(axis=1, initial=0.0)
-    floor = np.maximum(np.abs(gaps).max(axis=1, initial=0.0),
+    load_size = row_reduce(np.maximum, np.abs(loads), initial=0.0)
+    floor = np.maximum(row_reduce(np.maximum, np.abs(gaps), initial=0.0),
                        load_size / model.band[0].max(initial=1.0))
     limit = default_max_iterations(rows) if max_iterations is None else int(max_iterations)
     active = np.zeros((cases, rows), dtype=bool)
@@ -80,23 +91,25 @@ def solve_cases(model: Model, contact: str, loads: np.ndarray, gaps: np.ndarray,
     for _ in range(limit):
         if open_cases.size == 0:
             break
-        now = active[open_cases]
-        forces, singular = _held_forces(W, soft, q[open_cases], now)
-        lam[open_cases] = forces
-        steps[open_cases] += 1
-        u = u_free[open_cases] - forces @ flexibility_columns.T
-        penetration = q[open_cases] - forces @ W  # C u − g
-        disp_tol = DECISION_RTOL * np.maximum(np.abs(u).max(axis=1, initial=0.0),
-                                              floor[open_cases])[:, None]
+        # every case still open (as a batch often starts): views, not copies of every array
+        pick = slice(None) if open_cases.size == cases else open_cases
+        now = active[pick]
+        forces, singular = _held_forces(W, soft, q[pick], now)
+        lam[pick] = forces
+        steps[pick] += 1
+        u = u_free[pick] - forces @ flexibility_columns.T
+        penetration = q[pick] - forces @ W  # C u − g
+        disp_tol = DECISION_RTOL * np.maximum(row_reduce(np.maximum, np.abs(u), initial=0.0),
+                                              floor[pick])[:, None]
         if penalty is None:
             force_tol = DECISION_RTOL * np.maximum(
-                load_size[open_cases], np.abs(forces).max(axis=1, initial=0.0))[:, None]
+                load_size[pick], row_reduce(np.maximum, np.abs(forces), initial=0.0))[:, None]
             following = (now & (forces > -force_tol)) | (~now & (penetration > disp_tol))
         else:
             following = np.where(now, penetration > -disp_tol, penetration > disp_tol)
         still = (following != now).any(axis=1) & ~singular
         settled[open_cases[~still & ~singular]] = True
-        active[open_cases] = following
+        active[pick] = following
         open_cases = open_cases[still]
     u = u_free - lam @ flexibility_columns.T
     return CasesSolution(u, lam, steps, settled, u_free)
@@ -132,4 +145,4 @@ def _held_forces(W: np.ndarray, soft: float, q: np.ndarray,
     return lam, singular
 
 
-__all__ = ["CASES_ENTRIES", "CASES_ROWS", "CasesSolution", "fits", "solve_cases"]
+__all__ = ["CASES_ENTRIES", "CASES_ROWS", "CasesSolution", "fits", "row_reduce", "solve_cases"]

@@ -7,6 +7,7 @@ determine the contact forces); :func:`row_names`, how messages name its contact 
 from __future__ import annotations
 
 import copy
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
@@ -33,7 +34,7 @@ from contactqp.scene.validation import (
     _numbering,
     check_wall_fields,
 )
-from contactqp.scene.walls import Walls
+from contactqp.scene.walls import ReadAsItems, Walls
 from contactqp.units import UNIT_SYSTEMS, Units
 from contactqp.values import number, one_of, text, value_array
 
@@ -84,6 +85,8 @@ class Scene:
     units: str = "SI"
 
     def __post_init__(self) -> None:
+        if isinstance(self.loads, ValuedLoads):  # a batch's scene, made again (replace)
+            object.__setattr__(self, "loads", self.loads.items)
         for key, kind, plural in (("bars", Bar, "bar"), ("supports", Support, "support"),
                                   ("loads", Load, "load"),
                                   ("distributed", DistributedLoad, "distributed_load"),
@@ -145,20 +148,25 @@ class Scene:
         """The same scene with other walls (Wall objects, a :class:`Walls`, or both)."""
         return replace(self, walls=walls if isinstance(walls, Walls) else tuple(walls))
 
-    def with_values(self, loads: Any = None, gaps: Any = None) -> Scene:
+    def with_values(self, loads: Any = None, gaps: Any = None, *,
+                    load_objects: bool = True) -> Scene:
         """The same scene with other load values and gaps, everything else kept: ``loads``
         one per point load (force) then one per distributed load (force per length), in
         scene order; ``gaps`` one per contact row (the walls, then the bar contacts); in the
         scene's units; None keeps them. The new scene is checked as any scene is (gaps that
         leave a node no position are refused); its layout shares every array that does not
-        depend on the values with this scene's (:meth:`Layout.with_values`)."""
-        changes: dict[str, tuple] = {}
+        depend on the values with this scene's (:meth:`Layout.with_values`).
+        ``load_objects=False`` keeps the point loads' forces as an array, their Load objects
+        made only when they are read one by one (:attr:`load_forces` reads the array): for a
+        batch's scene of many cases (:mod:`contactqp.batch`)."""
+        changes: dict[str, Any] = {}
         if loads is not None:
             n_point = len(self.loads)
             values = value_array("loads", loads, (n_point + len(self.distributed),),
                                  "one per point load, then one per distributed load",
                                  OptionError)
-            changes["loads"] = _valued(self.loads, "force", values[:n_point])
+            changes["loads"] = (_valued(self.loads, "force", values[:n_point]) if load_objects
+                                else ValuedLoads(tuple(self.loads), values[:n_point]))
             changes["distributed"] = _valued(self.distributed, "intensity", values[n_point:])
         if gaps is not None:
             n_walls = len(self.walls)
@@ -177,12 +185,98 @@ class Scene:
         for name, value in changes.items():
             object.__setattr__(scene, name, value)
         if gaps is not None:
-            conflict = _conflict(scene)
+            conflict = _conflict(scene, self)
             if conflict:
                 raise SceneError(conflict)
         if "layout" in self.__dict__:
             scene.__dict__["layout"] = self.layout.with_values(scene)
         return scene
+
+    @property
+    def load_forces(self) -> np.ndarray:
+        """The point loads' forces in scene order, as an array (force)."""
+        if isinstance(self.loads, ValuedLoads):
+            return self.loads.forces
+        return np.fromiter((p.force for p in self.loads), float, len(self.loads))
+
+    @cached_property
+    def _opposed_walls(self) -> tuple[np.ndarray, np.ndarray]:
+        """The walls that share a node with a wall on its other side, as two arrays of rows
+        paired (the earlier row first). Where the walls sit is all it reads: a scene made by
+        :meth:`with_values` shares its scene's (:func:`_conflict`)."""
+        walls = Walls.of(self.walls)
+        offsets = np.concatenate(([0], np.cumsum([b.n_nodes for b in self.bars])))
+        at = offsets[walls.bars] + walls.nodes
+        # one wall per node and side (checked before): two walls at a node are one each side
+        order = np.argsort(at, kind="stable")
+        pair = np.flatnonzero(at[order][1:] == at[order][:-1])
+        return order[pair], order[pair + 1]
+
+
+class ValuedLoads(ReadAsItems, Sequence):
+    """A scene's point loads with other forces (:meth:`Scene.with_values` with
+    ``load_objects=False``): the forces kept as an array, and read as a sequence of
+    :class:`Load` (as the tuple of them would read) with the objects made on first use.
+
+    Parameters
+    ----------
+    loads : tuple of Load
+        The scene's point loads, already checked (where each sits).
+    forces : numpy.ndarray
+        One checked force per load, in order.
+    """
+
+    def __init__(self, loads: tuple[Load, ...], forces: np.ndarray) -> None:
+        self.loads = loads
+        self.forces = np.array(forces, dtype=float)
+        self.forces.flags.writeable = False
+
+    @cached_property
+    def items(self) -> tuple[Load, ...]:
+        """The loads as Load objects, in order (made on first use)."""
+        return _valued(self.loads, "force", self.forces)
+
+    def __len__(self) -> int:
+        return len(self.loads)
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, (ValuedLoads, tuple)):
+            return self.items == tuple(other)
+        return NotImplemented
+
+    def __repr__(self) -> str:
+        return repr(self.items)
+
+
+def side_by_side(scene: Scene, copies: int) -> Scene:
+    """``scene`` repeated ``copies`` times as one scene: the copies' bars one after another,
+    each copy's supports, loads, walls and bar contacts on its own bars (all the copies'
+    walls, one :class:`Walls`, then all their bar contacts, copy after copy). Not checked
+    again: each copy is ``scene`` (checked), on bars of its own, and nothing joins two copies;
+    the caller keeps the copies' elements within :data:`MAX_ELEMENTS`."""
+    n = len(scene.bars)
+
+    def moved(items: Any, *names: str) -> tuple:
+        made = []
+        for copy_ in range(copies):
+            for item in items:  # a copy field by field, as _valued makes them
+                shifted = object.__new__(type(item))
+                shifted.__dict__.update(item.__dict__)
+                for name in names:
+                    shifted.__dict__[name] = getattr(item, name) + copy_ * n
+                made.append(shifted)
+        return tuple(made)
+
+    tiled = object.__new__(Scene)
+    for name, value in (
+            ("bars", scene.bars * copies), ("supports", moved(scene.supports, "bar")),
+            ("loads", moved(scene.loads, "bar")),
+            ("walls", Walls.of(scene.walls).tiled(copies, n) if scene.walls else ()),
+            ("name", f"{scene.name} x {copies} cases"),
+            ("distributed", moved(scene.distributed, "bar")),
+            ("contacts", moved(scene.contacts, "bar_a", "bar_b")), ("units", scene.units)):
+        object.__setattr__(tiled, name, value)
+    return tiled
 
 
 def row_names(scene: Scene) -> list[str]:
@@ -205,21 +299,23 @@ def _valued(items: tuple, name: str, values: np.ndarray) -> tuple:
     return tuple(made)
 
 
-def _conflict(scene: Scene) -> str:
+def _conflict(scene: Scene, placed: Scene | None = None) -> str:
     """:func:`impossible_constraints`, then :func:`indeterminate_contacts`: why the scene's
     constraints leave a node no position or its contact forces undetermined, or "". A
     scene without bar contacts is first checked in numpy passes: with walls alone the only
     conflict is a node whose two walls' gaps sum below 0 (a wall repeating another is refused
-    before); the graph, a Python object and a text per wall, is made only to name it."""
-    # the numpy passes cost ~50 µs, the graph ~4 µs a wall: a few Wall objects go to the graph
-    if not scene.contacts and (isinstance(scene.walls, Walls) or len(scene.walls) > 16):
-        walls, n_nodes = Walls.of(scene.walls), sum(b.n_nodes for b in scene.bars)
-        offsets = np.concatenate(([0], np.cumsum([b.n_nodes for b in scene.bars])))
-        at = offsets[walls.bars] + walls.nodes
-        # at a node with a wall on each side, the room between them: its + and − gaps summed
-        room = np.bincount(at, walls.gaps, minlength=n_nodes)
-        both = np.bincount(at, minlength=n_nodes) == 2
-        if not (both & (room < 0.0)).any():
+    before); the graph, a Python object and a text per wall, is made only to name it.
+    ``placed``: a scene whose walls sit where ``scene``'s do (:meth:`Scene.with_values`), whose
+    pairs of opposed walls are kept (made once for all its values)."""
+    walls = scene.walls
+    # finding the pairs costs ~50 µs, the graph ~4 µs a wall: in a new scene a few Wall
+    # objects go to the graph; with the pairs kept, the test costs a few µs
+    if not scene.contacts and (placed is not None or isinstance(walls, Walls) or len(walls) > 16):
+        first, second = (scene if placed is None else placed)._opposed_walls
+        gaps = (walls.gaps if isinstance(walls, Walls)
+                else np.fromiter((w.gap for w in walls), float, len(walls)))
+        # at a node with a wall on each side, the room between them: the two gaps summed
+        if not (gaps[first] + gaps[second] < 0.0).any():
             return ""
     return impossible_constraints(scene) or indeterminate_contacts(scene)
 

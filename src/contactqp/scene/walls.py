@@ -102,8 +102,25 @@ def _sides(name: str, values: Any, size: int) -> np.ndarray:
     return _read_only(_sized(name, raw.astype("<U1"), size))
 
 
+class ReadAsItems:
+    """A set kept as arrays that reads as the tuple of its objects, ``items`` (made on first
+    use): iterated, indexed and added to a tuple as that tuple is."""
+
+    def __iter__(self):
+        return iter(self.items)
+
+    def __getitem__(self, index: Any) -> Any:
+        return self.items[index]
+
+    def __add__(self, other: Any) -> tuple:
+        return self.items + tuple(other)
+
+    def __radd__(self, other: Any) -> tuple:
+        return tuple(other) + self.items
+
+
 @dataclass(frozen=True, eq=False)
-class Walls:
+class Walls(ReadAsItems):
     """Rigid walls given as arrays, one entry per wall: wall i is at node ``nodes[i]`` of bar
     ``bars[i]``, ``gaps[i]`` (m) away on side ``sides[i]``, exactly as ``Wall(nodes[i],
     gaps[i], sides[i], bars[i])`` (:class:`~contactqp.scene.Wall`) and in that row order.
@@ -192,6 +209,13 @@ class Walls:
         made.__dict__["gaps"] = _read_only(np.array(gaps, dtype=float))
         return made
 
+    def tiled(self, copies: int, bars: int) -> Walls:
+        """These walls repeated ``copies`` times, one copy after another, copy c on the bars
+        ``c·bars`` further on (a batch's scene: :func:`contactqp.batch.tiled_scene`)."""
+        shift = bars * np.arange(copies, dtype=np.intp)[:, None]
+        return self._made(np.tile(self.nodes, copies), np.tile(self.gaps, copies),
+                          np.tile(self.sides, copies), (self.bars + shift).ravel(), self.name)
+
     @cached_property
     def signs(self) -> np.ndarray:
         """+1.0 for a wall on the + side, −1.0 for the − side: each row is sign·u <= gap."""
@@ -206,12 +230,6 @@ class Walls:
     def __len__(self) -> int:
         return int(self.nodes.size)
 
-    def __iter__(self):
-        return iter(self.items)
-
-    def __getitem__(self, index: Any) -> Any:
-        return self.items[index]
-
     def __bool__(self) -> bool:
         return bool(self.nodes.size)
 
@@ -225,12 +243,6 @@ class Walls:
         return NotImplemented
 
     __hash__ = None  # type: ignore[assignment]
-
-    def __add__(self, other: Any) -> tuple:
-        return self.items + tuple(other)
-
-    def __radd__(self, other: Any) -> tuple:
-        return tuple(other) + self.items
 
     def __repr__(self) -> str:
         return f"Walls({len(self)} walls)"
