@@ -120,7 +120,7 @@ def external_forces(layout: Layout, contact_force: np.ndarray,
     reactions, one entry each (a node may repeat); and how many entries are loads."""
     rows, contact_nodes, values, _ = layout.rows
     nodes = layout.load_nodes
-    loads = np.array([p.force for p in layout.scene.loads], dtype=float)
+    loads = layout.scene.load_forces
     if layout.scene.distributed:
         spread = layout.distributed_nodal_loads
         at = np.flatnonzero(spread)
