@@ -18,13 +18,13 @@ from contactqp.loops import opposed_forces
 from contactqp.model import (
     Layout,
     bar_groups,
-    count_up_to,
     in_set,
     largest,
     node_set,
     penetration,
     seen_stiffness,
 )
+from contactqp.runs import Running, count_at_or_before, kept, runs
 
 ROUND_OFF = 4.0 * np.finfo(float).eps  # a few units in the last place of what is stored
 
@@ -151,46 +151,6 @@ def _wedged(layout: Layout) -> np.ndarray:
     return wedged_rows(layout.scene)
 
 
-@dataclass(frozen=True)
-class Running:
-    """E_j, the running sum of the outside forces over the nodes 0..j: at every node
-    (``steps`` None, ``levels`` E_j), or, where few nodes are loaded, as its steps (the
-    loaded nodes, sorted, and E from each of them on; 0 before the first), so that the
-    check makes no array over the chain for it (one wall on 10⁶ elements: two passes and two
-    arrays of 8 MB fewer). Both give the same numbers bit for bit: the sum over the nodes in
-    between adds exact zeros."""
-
-    steps: np.ndarray | None
-    levels: np.ndarray
-
-    @classmethod
-    def of(cls, n_nodes: int, nodes: np.ndarray, forces: np.ndarray) -> Running:
-        """The running sum of ``forces`` at ``nodes`` (a node may repeat)."""
-        if 8 * nodes.size > n_nodes:
-            return cls(None, np.cumsum(np.bincount(nodes, forces, minlength=n_nodes)))
-        steps, inverse = np.unique(nodes, return_inverse=True)
-        return cls(steps, np.cumsum(np.bincount(inverse.reshape(-1), forces,
-                                                minlength=steps.size)))
-
-    def at(self, nodes: np.ndarray | int) -> np.ndarray:
-        """E at ``nodes``."""
-        if self.steps is None:
-            return self.levels[nodes]
-        step = np.searchsorted(self.steps, nodes, side="right") - 1
-        return np.where(step >= 0, self.levels[np.maximum(step, 0)], 0.0)
-
-    def plus(self, links: np.ndarray) -> np.ndarray:
-        """links_j + E_j for every link j (a new array)."""
-        if self.steps is None:
-            return links + self.levels[:-1]
-        total = np.empty_like(links)
-        bounds = np.concatenate(([0], np.minimum(self.steps, links.size), [links.size]))
-        levels = np.concatenate(([0.0], self.levels))
-        for level, a, b in zip(levels.tolist(), bounds[:-1].tolist(), bounds[1:].tolist()):
-            np.add(links[a:b], level, out=total[a:b])
-        return total
-
-
 def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
               outside: Running) -> tuple[float, float]:
     """What the imbalance of an answer does with the ``held`` nodes (sorted) fixed: (the
@@ -212,47 +172,22 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
     r = outside.plus(links)
     if element.size != r.size:  # junctions between bars: not every link is an element
         r = r[element]
-    starts = _run_first_elements(layout, held)
-    ends = np.append(starts[1:], element.size)
-    # per run: is it held at its left end, at its right end (a held node in its own bar)
-    count = _count_at_or_before(layout.n_nodes, held, element[starts])  # held up to its start
-    first, last = layout.element_bar_ends[0][starts], layout.element_bar_ends[1][starts]
-    left_held = (count > 0) & (held[np.maximum(count - 1, 0)] >= first)
-    right_held = (count < held.size) & (held[np.minimum(count, held.size - 1)] <= last)
+    run = runs(layout, held)
     # c per run: weighted mean (held at both ends), the free end's cut residual otherwise
-    both = left_held & right_held
-    mean = np.add.reduceat(r * compliance, starts) / np.add.reduceat(compliance, starts)
-    after_bar = outside.at(last)
-    before_bar = np.where(first > 0, outside.at(np.maximum(first - 1, 0)), 0.0)
-    c_run = np.where(both, mean, np.where(left_held, after_bar, before_bar))
-    sway = _sway(r, compliance, c_run, starts, ends, left_held)  # r is reused there
+    mean = np.add.reduceat(r * compliance, run.starts) / run.compliance
+    after_bar = outside.at(run.last)
+    before_bar = np.where(run.first > 0, outside.at(np.maximum(run.first - 1, 0)), 0.0)
+    c_run = np.where(run.left_held & run.right_held, mean,
+                     np.where(run.left_held, after_bar, before_bar))
+    sway = _sway(r, compliance, c_run, run.starts, run.ends, run.left_held)  # r reused there
     # force error at each held node: the jump of c between the elements on either side of it
     # (past a bar's end, the cut residual there)
-    start, end = layout.bar_ends[0][held], layout.bar_ends[1][held]
-    at = layout.element_position[np.concatenate((held - 1, held)).clip(0, element[-1])]
-    run_of = _count_at_or_before(element.size, starts, np.minimum(at, element.size - 1)) - 1
-    c_at = c_run[run_of]
+    start, end = run.held_start, run.held_end
+    c_at = c_run[run.run_of]
     c_left = np.where(held > start, c_at[: held.size],
                       np.where(start > 0, outside.at(np.maximum(start - 1, 0)), 0.0))
     c_right = np.where(held < end, c_at[held.size:], outside.at(end))
     return largest(c_left - c_right), sway
-
-
-def _run_first_elements(layout: Layout, held: np.ndarray) -> np.ndarray:
-    """The first element (index in :attr:`Layout.elements`) of every run of elements between
-    held nodes in one bar: element 0, each bar's first and each element that starts at a held
-    node. From the held nodes alone, with no pass over the chain when they are few."""
-    n = layout.elements[0].size
-    firsts = layout.element_position[layout.node_offsets[:-1]]
-    marks = layout.element_position[held]
-    if 8 * (marks.size + firsts.size) <= n:
-        starts = np.unique(np.concatenate(([0], firsts, marks)))
-        return starts[starts < n]
-    mask = np.zeros(n + 1, dtype=bool)
-    mask[0] = True
-    mask[firsts] = True
-    mask[marks] = True
-    return np.flatnonzero(mask[:n])
 
 
 def _sway(r: np.ndarray, compliance: np.ndarray, c_run: np.ndarray, starts: np.ndarray,
@@ -300,16 +235,6 @@ def _release(layout: Layout, held: np.ndarray, pushing: np.ndarray, lam: np.ndar
     stiffness = row_stiffness(layout, still, sure)[unsure]
     with np.errstate(divide="ignore"):
         return float(np.max(force_bound / stiffness))
-
-
-def _count_at_or_before(n_nodes: int, held: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-    """np.searchsorted(held, nodes, side="right") for node numbers (``held`` sorted,
-    distinct): by one running count over the chain when ``nodes`` are many."""
-    if 8 * np.size(nodes) <= n_nodes:
-        return np.searchsorted(held, nodes, side="right")
-    mask = np.zeros(n_nodes, dtype=bool)
-    mask[held] = True
-    return count_up_to(mask)[nodes]
 
 
 def _contact_give(layout: Layout, held: np.ndarray, pushing: np.ndarray) -> float:
@@ -411,7 +336,7 @@ def _closing(layout: Layout, moves: tuple[np.ndarray, np.ndarray], row_nodes: np
         s = row_stiffness(layout, held, pushing)
     bar = layout.bar_of(row_nodes)
     held_bar = layout.bar_of(held)
-    after = _count_at_or_before(layout.n_nodes, held, row_nodes)
+    after = count_at_or_before(layout.n_nodes, held, row_nodes)
     left, right = np.maximum(after - 1, 0), np.minimum(after, held.size - 1)
     induced = np.maximum(np.where((after > 0) & (held_bar[left] == bar), shift[left], 0.0),
                          np.where((after < held.size) & (held_bar[right] == bar), shift[right],
@@ -435,17 +360,30 @@ def row_stiffness(layout: Layout, held: np.ndarray, pushing: np.ndarray,
     element of 1e12 N/m; taking both ends in series, the soft one, the penalty passed with
     that contact's 6178 N carried by the stiff element instead, 2e-3 of F off.) With
     ``ends``, also the stiffness of each end (per nonzero of :attr:`Scene.contact_rows`)."""
+    walls_only = len(layout.scene.walls) == layout.rows.gap.size
+    # kept per held set (contactqp.runs); with bar contacts the pushing rows decide too
+    kind = "stiffness" if walls_only else ("stiffness", np.packbits(pushing).tobytes())
+    row, node_stiffness = kept(layout, kind, held,
+                               lambda: _row_stiffness(layout, held, pushing, walls_only))
+    return (row, node_stiffness) if ends else row
+
+
+def _row_stiffness(layout: Layout, held: np.ndarray, pushing: np.ndarray, walls_only: bool
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`row_stiffness` made anew: (per row, per end), read-only."""
     rows, row_nodes, _, gaps = layout.rows
     node_stiffness = seen_stiffness(layout, held, row_nodes)
+    node_stiffness.flags.writeable = False
     n_walls = len(layout.scene.walls)
-    if n_walls == gaps.size:  # walls only: a row is its node
-        return (node_stiffness, node_stiffness) if ends else node_stiffness
+    if walls_only:  # a row is its node
+        return node_stiffness, node_stiffness
     rigid = np.concatenate((layout.support_nodes, row_nodes[:n_walls][pushing[:n_walls]],
                             row_nodes[(rows >= n_walls) & pushing[rows]]))
     fixed = (rows >= n_walls) & in_set(layout.n_nodes, row_nodes, rigid)
     # both ends held: the contact closes only as a wall gives, at that end's own stiffness
     fixed &= np.bincount(rows[fixed], minlength=gaps.size)[rows] < 2
-    node_stiffness[fixed] = np.inf
+    node_stiffness = np.where(fixed, np.inf, node_stiffness)
     with np.errstate(divide="ignore"):
         row = 1.0 / np.bincount(rows, 1.0 / node_stiffness, minlength=gaps.size)
-    return (row, node_stiffness) if ends else row
+    row.flags.writeable = node_stiffness.flags.writeable = False
+    return row, node_stiffness

@@ -49,7 +49,8 @@ TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_positio
             "element_bar_ends", "opposed_entries", "support_mask", "junctions",
             "element_stiffness", "areas", "yield_stress", "compliance", "chained_compliance",
             "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes",
-            "longest_bar", "row_compliance", "row_bars", "floating_bars")
+            "longest_bar", "row_compliance", "row_bars", "floating_bars", "wall_nodes_by_side",
+            "held_cache")
 
 
 def _gaps(scene: Scene) -> np.ndarray:
@@ -241,6 +242,23 @@ class Layout:
         (inf where none) and its row (−1 where none). A scene has at most one wall per node
         and side (contactqp.scene refuses more); walls at supports are left out."""
         return wall_arrays(self)
+
+    @cached_property
+    def held_cache(self) -> dict:
+        """What the check works out from a set of held nodes alone, for the last few sets
+        (:func:`contactqp.runs.kept`): it depends on where things sit and on the stiffnesses,
+        never on the load values or the gaps, so the layouts of :meth:`with_values` share it."""
+        return {}
+
+    @cached_property
+    def wall_nodes_by_side(self) -> dict[int, np.ndarray]:
+        """Per side, the global nodes that have a wall on it, sorted (walls at supports left
+        out, as in :attr:`walls_by_side`): where the walls sit, so shared by
+        :meth:`with_values`."""
+        rows, walls = self.rows, len(self.scene.walls)
+        node, sign = rows.node[:walls], rows.coefficient[:walls]
+        return {side: _read_only(np.sort(node[(sign == side) & ~self.support_mask[node]]))
+                for side in (1, -1)}
 
     @property
     def n_nodes(self) -> int:

@@ -63,10 +63,7 @@ class WallsOnChain:
         self.owner = {side: owner for side, (_, owner) in layout.walls_by_side.items()}
         # ... and the nodes that have a wall on each side, sorted: the steps read the chain
         # there only (one wall on 10⁶ nodes: no pass over the chain per side and step)
-        rows, walls = layout.rows, len(model.scene.walls)
-        node, sign = rows.node[:walls], rows.coefficient[:walls]
-        self.wall_nodes = {side: np.sort(node[(sign == side) & ~layout.support_mask[node]])
-                           for side in (1, -1)}
+        self.wall_nodes = layout.wall_nodes_by_side
         self.n = n
         self.n_rows = model.n_contacts
         P = scaled(layout.nodal_loads)

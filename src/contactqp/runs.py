@@ -1,0 +1,159 @@
+"""What the check (contactqp.bounds) works out along the chain before it reads an answer's
+numbers: the runs of elements between held nodes (:class:`Runs`), the stiffness each contact
+row sees with those nodes held, and the running sum of the outside forces (:class:`Running`).
+
+The runs and the stiffnesses depend on the held nodes, the bars and the stiffnesses alone,
+never on the load values, the gaps or the answer's values, so they are kept on the layout
+(:attr:`contactqp.layout.Layout.held_cache`, shared by the layouts of one prepared scene) for
+the last few held sets: a scene solved again, ``prepared.solve`` and ``solve_many`` meet the
+same sets again and again. What is kept is what would be computed, bit for bit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from contactqp.model import Layout, count_up_to
+
+KEPT_BYTES = 2**27  # what a layout keeps at most (128 MB; the oldest sets dropped first)
+
+
+def kept(layout: Layout, kind: Any, held: np.ndarray, make: Callable[[], Any]) -> Any:
+    """``make()`` for the ``held`` nodes (sorted) and ``kind`` (anything else it depends on),
+    or what it gave for the same before. Found by (kind, size, sum) and confirmed element by
+    element, so that a long held set is never hashed whole. What is kept is read-only."""
+    cache = layout.held_cache
+    key = (kind, held.size, int(held.sum()))
+    found = cache.get(key)
+    if found is not None and np.array_equal(found[0], held):
+        return found[1]
+    value = make()
+    size = held.nbytes + sum(a.nbytes for a in _arrays(value))
+    while cache and sum(entry[2] for entry in cache.values()) + size > KEPT_BYTES:
+        cache.pop(next(iter(cache)))
+    if size <= KEPT_BYTES:
+        cache[key] = (held.copy(), value, size)
+    return value
+
+
+def _arrays(value: Any) -> list[np.ndarray]:
+    items = value.__dict__.values() if hasattr(value, "__dict__") else value
+    return [item for item in items if isinstance(item, np.ndarray)]
+
+
+@dataclass(frozen=True)
+class Runs:
+    """The runs of elements between held nodes in one bar (indices in
+    :attr:`Layout.elements`): each run's first element and one past its last, whether it is
+    held at its left and right end, its bar's first and last node, the sum of its
+    compliances; and for each held node, the run just left and just right of it (−1 none)
+    and its bar's first and last node."""
+
+    starts: np.ndarray
+    ends: np.ndarray
+    left_held: np.ndarray
+    right_held: np.ndarray
+    first: np.ndarray
+    last: np.ndarray
+    compliance: np.ndarray
+    run_of: np.ndarray
+    held_start: np.ndarray
+    held_end: np.ndarray
+
+
+def runs(layout: Layout, held: np.ndarray) -> Runs:
+    """The :class:`Runs` of the ``held`` nodes (sorted, at least one), kept per held set."""
+    return kept(layout, "runs", held, lambda: _runs(layout, held))
+
+
+def _runs(layout: Layout, held: np.ndarray) -> Runs:
+    element, compliance = layout.elements
+    starts = _run_first_elements(layout, held)
+    ends = np.append(starts[1:], element.size)
+    # per run: is it held at its left end, at its right end (a held node in its own bar)
+    count = count_at_or_before(layout.n_nodes, held, element[starts])  # held up to its start
+    first, last = layout.element_bar_ends[0][starts], layout.element_bar_ends[1][starts]
+    left_held = (count > 0) & (held[np.maximum(count - 1, 0)] >= first)
+    right_held = (count < held.size) & (held[np.minimum(count, held.size - 1)] <= last)
+    at = layout.element_position[np.concatenate((held - 1, held)).clip(0, element[-1])]
+    run_of = count_at_or_before(element.size, starts, np.minimum(at, element.size - 1)) - 1
+    made = Runs(starts, ends, left_held, right_held, first, last,
+                np.add.reduceat(compliance, starts), run_of, layout.bar_ends[0][held],
+                layout.bar_ends[1][held])
+    for array in made.__dict__.values():
+        array.flags.writeable = False
+    return made
+
+
+def _run_first_elements(layout: Layout, held: np.ndarray) -> np.ndarray:
+    """The first element (index in :attr:`Layout.elements`) of every run of elements between
+    held nodes in one bar: element 0, each bar's first and each element that starts at a held
+    node. From the held nodes alone, with no pass over the chain when they are few."""
+    n = layout.elements[0].size
+    firsts = layout.element_position[layout.node_offsets[:-1]]
+    marks = layout.element_position[held]
+    if 8 * (marks.size + firsts.size) <= n:
+        starts = np.unique(np.concatenate(([0], firsts, marks)))
+        return starts[starts < n]
+    mask = np.zeros(n + 1, dtype=bool)
+    mask[0] = True
+    mask[firsts] = True
+    mask[marks] = True
+    return np.flatnonzero(mask[:n])
+
+
+def count_at_or_before(n_nodes: int, held: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """np.searchsorted(held, nodes, side="right") for node numbers (``held`` sorted,
+    distinct): by one running count over the chain when ``nodes`` are many."""
+    if 8 * np.size(nodes) <= n_nodes:
+        return np.searchsorted(held, nodes, side="right")
+    mask = np.zeros(n_nodes, dtype=bool)
+    mask[held] = True
+    return count_up_to(mask)[nodes]
+
+
+@dataclass(frozen=True)
+class Running:
+    """E_j, the running sum of the outside forces over the nodes 0..j: at every node
+    (``steps`` None, ``levels`` E_j), or, where few nodes are loaded, as its steps (the
+    loaded nodes, sorted, and E from each of them on; 0 before the first), so that the
+    check makes no array over the chain for it (one wall on 10⁶ elements: two passes and two
+    arrays of 8 MB fewer). Both give the same numbers bit for bit: the sum over the nodes in
+    between adds exact zeros."""
+
+    steps: np.ndarray | None
+    levels: np.ndarray
+
+    @classmethod
+    def of(cls, n_nodes: int, nodes: np.ndarray, forces: np.ndarray) -> Running:
+        """The running sum of ``forces`` at ``nodes`` (a node may repeat)."""
+        if 8 * nodes.size > n_nodes:
+            return cls(None, np.cumsum(np.bincount(nodes, forces, minlength=n_nodes)))
+        steps, inverse = np.unique(nodes, return_inverse=True)
+        return cls(steps, np.cumsum(np.bincount(inverse.reshape(-1), forces,
+                                                minlength=steps.size)))
+
+    def at(self, nodes: np.ndarray | int) -> np.ndarray:
+        """E at ``nodes``."""
+        if self.steps is None:
+            return self.levels[nodes]
+        step = np.searchsorted(self.steps, nodes, side="right") - 1
+        return np.where(step >= 0, self.levels[np.maximum(step, 0)], 0.0)
+
+    def plus(self, links: np.ndarray) -> np.ndarray:
+        """links_j + E_j for every link j (a new array)."""
+        if self.steps is None:
+            return links + self.levels[:-1]
+        total = np.empty_like(links)
+        bounds = np.concatenate(([0], np.minimum(self.steps, links.size), [links.size]))
+        levels = np.concatenate(([0.0], self.levels))
+        for level, a, b in zip(levels.tolist(), bounds[:-1].tolist(), bounds[1:].tolist()):
+            np.add(links[a:b], level, out=total[a:b])
+        return total
+
+
+__all__ = ["KEPT_BYTES", "Running", "Runs", "count_at_or_before", "kept", "runs"]
