@@ -9,7 +9,8 @@
                       a fresh process (a subprocess), with the imports the first solve needs
     check / method    the check's time over the method's, from the Results' own timings
     default scene     one verified solve of contactqp.default_scene() against the seed's numpy
-                      script (benchmarks/loop.py, hand_script); prepared.solve against the same
+                      script (benchmarks/loop.py, hand_script; the faster of this process and
+                      one with a single OpenBLAS thread); prepared.solve against the same
     solve_many 10⁴    10⁴ cases varying the load and the gap against a vectorised numpy version
 
 Every row gives the method's, the check's and the build's time apart (Result.timings).
@@ -24,6 +25,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import subprocess
 import sys
 import time
@@ -147,8 +149,9 @@ def many_walls(quick: bool) -> list[dict]:
 def default_loop(quick: bool) -> list[dict]:
     repeats, cases = (50, 1000) if quick else (300, 10_000)
     scene = contactqp.default_scene()
-    script = median_time(hand_script, repeats)
-    rows = [_row("seed numpy script", script, script, "", 1.0)]
+    here, alone = median_time(hand_script, repeats), _one_thread_script(repeats)
+    script = min(here, alone)
+    rows = [_row("seed numpy script", script, script, "", 1.0, here=here, one_thread=alone)]
     result = contactqp.solve(scene)
     if not (result.verified and math.isclose(result.contact_force[0], hand_script()[1],
                                              rel_tol=1e-9)):
@@ -175,6 +178,24 @@ def default_loop(quick: bool) -> list[dict]:
     return rows
 
 
+SEED_SCRIPT = """
+from cases import median_time
+from loop import hand_script
+print(median_time(hand_script, {repeats}))
+"""
+
+
+def _one_thread_script(repeats: int) -> float:
+    """The seed script's median time in a process with one OpenBLAS thread. Its 5x5 solve
+    took 34 µs there every time, and 34-80 µs from one process to the next with OpenBLAS's
+    default threads (same numpy), so the floor is the faster of the two: the stricter one."""
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    out = subprocess.run([sys.executable, "-c", SEED_SCRIPT.format(repeats=repeats)],
+                         capture_output=True, text=True, check=True, env=env,
+                         cwd=Path(__file__).parent).stdout
+    return float(out)
+
+
 def vectorised(forces: np.ndarray, gaps: np.ndarray) -> np.ndarray:
     """The tip wall's force of every case, as benchmarks/loop.py's hand_vectorised writes it:
     the free displacements of all cases by one solve with K and many right-hand sides, then
@@ -197,6 +218,8 @@ def main(quick: bool, out: Path) -> None:
         ratio = f" {r['check_over_method']:7.2f}" if "check_over_method" in r else ""
         goal = f"{r['goal']:5.0f}" if r["against"] else ""
         print(f"{r['run']:48} {1e3 * r['seconds']:9.3f} {r['ratio']:7.1f} {goal:>5}{split}{ratio}"
-              + (f"  import {1e3 * r['import']:.0f} ms" if "import" in r else ""))
+              + (f"  import {1e3 * r['import']:.0f} ms" if "import" in r else "")
+              + (f"  (this process {1e6 * r['here']:.0f} µs, one OpenBLAS thread "
+                 f"{1e6 * r['one_thread']:.0f} µs)" if "one_thread" in r else ""))
     out.mkdir(parents=True, exist_ok=True)
     (out / "speed.json").write_text(json.dumps({"machine": machine(), "rows": rows}, indent=1))

@@ -7,6 +7,7 @@ nodes, the stiffness a node sees (:func:`seen_stiffness`), the scale of the load
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -180,8 +181,15 @@ def largest(values: np.ndarray) -> float:
     values = np.asarray(values, dtype=float)
     if values.size == 0:
         return 0.0
-    top = max(float(values.max()), -float(values.min()))
-    return top if np.isfinite(top) else np.inf
+    if values.size <= SMALL:  # one |x| and one reduction, without numpy's Python layers
+        top = float(np.maximum.reduce(np.abs(values), axis=None))
+    else:  # two reductions and no array of |x| over a long chain
+        top = max(float(np.maximum.reduce(values, axis=None)),
+                  -float(np.minimum.reduce(values, axis=None)))
+    return top if math.isfinite(top) else math.inf
+
+
+SMALL = 1024  # arrays up to this size are cheaper to copy than to reduce twice
 
 
 def load_force_scale(layout: Layout) -> float:

@@ -160,6 +160,9 @@ class WallsOnChain:
             inner = a + 1 if anchored_left else a
             anchored_right = b < self.n and not self.bar_start[b] and bool(pinned[b])
             nodes = walled[np.searchsorted(walled, inner): np.searchsorted(walled, b)]
+            if nodes.size == 1:  # one wall in the stretch: the minorant's only vertex
+                adding[nodes[signed_gap(nodes) < -tolerance]] = True
+                continue
             x, y = self.phi[nodes], signed_gap(nodes)
             if anchored_left:
                 x, y = np.concatenate(([self.phi[a]], x)), np.concatenate(([0.0], y))
