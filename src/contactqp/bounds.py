@@ -289,7 +289,7 @@ def gap_moves(layout: Layout, held: np.ndarray, nodes: np.ndarray, delta: np.nda
     index[moving] = np.arange(moving.size)
     place = index[nodes]
     listed = place >= 0
-    np.maximum.at(by_node, place[listed], delta[listed])
+    _largest_at(by_node, place[listed], delta[listed])
     n_walls = len(layout.scene.walls)
     tied = [(int(np.searchsorted(moving, layout.node(c.bar_a, c.node_a))),
              int(np.searchsorted(moving, layout.node(c.bar_b, c.node_b))))
@@ -315,6 +315,16 @@ def gap_moves(layout: Layout, held: np.ndarray, nodes: np.ndarray, delta: np.nda
     shifted_right = np.append(by_node[1:], 0.0)
     change = (by_node * (to_left + to_right) + shifted_left * to_left + shifted_right * to_right)
     return largest(change), largest(by_node), (moving, by_node)
+
+
+def _largest_at(into: np.ndarray, at: np.ndarray, values: np.ndarray) -> None:
+    """np.maximum.at(into, at, values) for ``values`` >= 0 (or NaN) into zeros: written
+    directly, and only the entries a repeated place overwrote taken again by np.maximum.at
+    (which costs ~0.1 µs an entry: 1 ms for the 10⁴ walls of a batch)."""
+    into[at] = values
+    lost = into[at] != values  # a later entry at the same place wrote over it
+    if lost.any():
+        np.maximum.at(into, at[lost], values[lost])
 
 
 def _closing(layout: Layout, moves: tuple[np.ndarray, np.ndarray], row_nodes: np.ndarray,
@@ -346,7 +356,7 @@ def _closing(layout: Layout, moves: tuple[np.ndarray, np.ndarray], row_nodes: np
         per_row[rows] = induced
     else:
         per_row = np.zeros(stand_off.size)
-        np.maximum.at(per_row, rows, induced)
+        _largest_at(per_row, rows, induced)
     return largest(np.maximum(per_row - stand_off, 0.0) * np.where(np.isfinite(stand_off), s, 0.0))
 
 
