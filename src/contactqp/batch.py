@@ -86,7 +86,7 @@ def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
                                 layout.longest_bar)
     load = many.row_reduce(np.maximum, layout.load_terms.reshape(cases, -1))
     press = largest(per_case_rows(layout.press_fit_forces, walls, cases))
-    F = force_scale_rule(load, press, float(layout.element_stiffness.min()), U)
+    F = force_scale_rule(load, press, layout.softest, U)
     return F, U
 
 

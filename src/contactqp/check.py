@@ -234,9 +234,7 @@ def row_compliance_roots(layout: Layout) -> np.ndarray:
     """√ of the compliance each row sees with the supports held
     (:attr:`contactqp.model.Layout.row_compliance`; a bar contact's two ends in series); NaN
     where a row sees no stiffness or an infinite one (it is left out of :func:`natural_map`)."""
-    compliance = layout.row_compliance
-    usable = np.isfinite(compliance) & (compliance > 0.0)
-    return np.where(usable, np.sqrt(np.where(usable, compliance, 1.0)), np.nan)
+    return layout.row_compliance_roots  # made once per layout topology
 
 
 def _shape(name: str, values: np.ndarray, size: int) -> None:

@@ -50,7 +50,12 @@ TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_positio
             "element_stiffness", "areas", "yield_stress", "compliance", "chained_compliance",
             "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes",
             "longest_bar", "row_compliance", "row_bars", "floating_bars", "wall_nodes_by_side",
-            "held_cache")
+            "held_cache", "row_compliance_roots", "softest")
+
+
+# ... and those that depend on the gaps but not on the load values: shared when only the
+# load values change
+SAME_GAPS = ("rows", "walls_by_side", "press_fit_forces", "press_fit_force")
 
 
 def _gaps(scene: Scene) -> np.ndarray:
@@ -91,7 +96,11 @@ class Layout:
         for name in TOPOLOGY:
             if name in self.__dict__:
                 layout.__dict__[name] = self.__dict__[name]
-        if "rows" in self.__dict__:
+        same_gaps = scene.walls is self.scene.walls and scene.contacts is self.scene.contacts
+        for name in SAME_GAPS if same_gaps else ():  # new loads alone
+            if name in self.__dict__:
+                layout.__dict__[name] = self.__dict__[name]
+        if "rows" in self.__dict__ and not same_gaps:
             layout.__dict__["rows"] = self.rows._replace(gap=_read_only(_gaps(scene)))
         return layout
 
@@ -242,6 +251,20 @@ class Layout:
         (inf where none) and its row (−1 where none). A scene has at most one wall per node
         and side (contactqp.scene refuses more); walls at supports are left out."""
         return wall_arrays(self)
+
+    @cached_property
+    def row_compliance_roots(self) -> np.ndarray:
+        """√ of :attr:`row_compliance` where it is finite and positive, NaN elsewhere (the
+        natural map's scaling, :func:`contactqp.check.natural_map`)."""
+        compliance = self.row_compliance
+        usable = np.isfinite(compliance) & (compliance > 0.0)
+        return _read_only(np.where(usable, np.sqrt(np.where(usable, compliance, 1.0)), np.nan))
+
+    @cached_property
+    def softest(self) -> float:
+        """The smallest element stiffness (N/m): :attr:`contactqp.model.Model.force_scale`
+        of a scene that nothing loads."""
+        return float(self.element_stiffness.min())
 
     @cached_property
     def held_cache(self) -> dict:

@@ -177,8 +177,7 @@ class Model:
         is the softest element's stiffness times :attr:`displacement_scale`."""
         layout = self.layout
         return float(force_scale_rule(layout.load_scale, layout.press_fit_force,
-                                      float(layout.element_stiffness.min()),
-                                      self.displacement_scale))
+                                      layout.softest, self.displacement_scale))
 
     @cached_property
     def displacement_scale(self) -> float:
