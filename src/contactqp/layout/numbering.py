@@ -97,9 +97,8 @@ class Layout:
             if name in self.__dict__:
                 layout.__dict__[name] = self.__dict__[name]
         same_gaps = scene.walls is self.scene.walls and scene.contacts is self.scene.contacts
-        for name in SAME_GAPS if same_gaps else ():  # new loads alone
-            if name in self.__dict__:
-                layout.__dict__[name] = self.__dict__[name]
+        for name in SAME_GAPS if same_gaps else ():  # new loads alone: made here once, so
+            layout.__dict__[name] = getattr(self, name)  # that every later layout shares them
         if "rows" in self.__dict__ and not same_gaps:
             layout.__dict__["rows"] = self.rows._replace(gap=_read_only(_gaps(scene)))
         return layout
