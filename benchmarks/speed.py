@@ -17,7 +17,8 @@ Every row gives the method's, the check's and the build's time apart (Result.tim
 Warm rows drop each run's Result before the next, as the floor drops its arrays: on this
 machine a fresh page from the OS costs ~26 µs (a new 8 MB array 13 ms, against 0.4 ms for
 one reused), so holding every Result of a 10⁶-element run made its solve 97 ms instead of
-35-48 ms. The first-solve rows pay those pages, as a user's first solve does.
+35-48 ms. The first-solve rows pay those pages, as a user's first solve does; the fresh
+process counts its page faults.
 Writes speed.json.
 """
 
@@ -40,17 +41,20 @@ from contactqp.builders import channel, flat_patch
 from loop import FORCE, GAP, hand_script, hand_stiffness
 
 FIRST_SOLVE = """
-import sys, time
+import resource, sys, time
 start = time.perf_counter()
 import contactqp
+import numpy as np
 from contactqp.builders import {builder}
 imported = time.perf_counter()
 scene = {builder}({size})
 built = time.perf_counter()
+faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
 result = contactqp.solve(scene)
 done = time.perf_counter()
+faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults
 assert result.verified, result.message
-print(imported - start, built - imported, done - built)
+print(imported - start, built - imported, done - built, faults)
 """
 
 
@@ -119,8 +123,8 @@ def _fresh_process(builder: str, size: int) -> dict[str, float]:
     code = FIRST_SOLVE.format(builder=builder, size=size)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
-    imported, built, solved = map(float, out)
-    return {"import": imported, "scene": built, "first_solve": solved}
+    imported, built, solved, faults = map(float, out)
+    return {"import": imported, "scene": built, "first_solve": solved, "page_faults": faults}
 
 
 def many_walls(quick: bool) -> list[dict]:
@@ -218,7 +222,8 @@ def main(quick: bool, out: Path) -> None:
         ratio = f" {r['check_over_method']:7.2f}" if "check_over_method" in r else ""
         goal = f"{r['goal']:5.0f}" if r["against"] else ""
         print(f"{r['run']:48} {1e3 * r['seconds']:9.3f} {r['ratio']:7.1f} {goal:>5}{split}{ratio}"
-              + (f"  import {1e3 * r['import']:.0f} ms" if "import" in r else "")
+              + (f"  import {1e3 * r['import']:.0f} ms, {r['page_faults']:.0f} page faults"
+                 if "import" in r else "")
               + (f"  (this process {1e6 * r['here']:.0f} µs, one OpenBLAS thread "
                  f"{1e6 * r['one_thread']:.0f} µs)" if "one_thread" in r else ""))
     out.mkdir(parents=True, exist_ok=True)
