@@ -44,7 +44,6 @@ FIRST_SOLVE = """
 import resource, sys, time
 start = time.perf_counter()
 import contactqp
-import numpy as np
 from contactqp.builders import {builder}
 imported = time.perf_counter()
 scene = {builder}({size})
