@@ -103,3 +103,16 @@ def test_the_running_sum_as_steps_is_the_running_sum(loaded):
     assert np.array_equal(steps.at(probe), dense[probe])
     many = runs.Running.of(n, rng.integers(0, n, n), rng.normal(size=n))
     assert many.steps is None  # loads on most nodes: the running sum itself
+
+
+@pytest.mark.parametrize("ufunc", [np.add, np.maximum, np.minimum])
+def test_runs_of_mostly_one_element_reduce_as_reduceat_does(ufunc):
+    # a pressed patch: every node held but a stretch at the free end, so all runs but one
+    # are one element; the long run's reduction must be reduceat's, bit for bit
+    layout = flat_patch(3000).layout
+    n = layout.n_nodes
+    held = np.concatenate((np.arange(0, n - 400), np.arange(n - 200, n - 150)))
+    found = runs.runs(layout, held)
+    assert 0 < found.long.size and found.long.size * runs.LONG_RUNS <= found.starts.size
+    values = np.random.default_rng(5).normal(0.0, 1e3, layout.elements[0].size)
+    assert np.array_equal(found.reduce(ufunc, values), ufunc.reduceat(values, found.starts))

@@ -24,7 +24,7 @@ from contactqp.model import (
     penetration,
     seen_stiffness,
 )
-from contactqp.runs import Running, count_at_or_before, kept, runs
+from contactqp.runs import Running, Runs, count_at_or_before, kept, runs
 
 ROUND_OFF = 4.0 * np.finfo(float).eps  # a few units in the last place of what is stored
 
@@ -174,12 +174,12 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
         r = r[element]
     run = runs(layout, held)
     # c per run: weighted mean (held at both ends), the free end's cut residual otherwise
-    mean = np.add.reduceat(r * compliance, run.starts) / run.compliance
+    mean = run.reduce(np.add, r * compliance) / run.compliance
     after_bar = outside.at(run.last)
     before_bar = np.where(run.first > 0, outside.at(np.maximum(run.first - 1, 0)), 0.0)
     c_run = np.where(run.left_held & run.right_held, mean,
                      np.where(run.left_held, after_bar, before_bar))
-    sway = _sway(r, compliance, c_run, run.starts, run.ends, run.left_held)  # r reused there
+    sway = _sway(r, compliance, c_run, run)  # r reused there
     # force error at each held node: the jump of c between the elements on either side of it
     # (past a bar's end, the cut residual there)
     start, end = run.held_start, run.held_end
@@ -190,14 +190,14 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
     return largest(c_left - c_right), sway
 
 
-def _sway(r: np.ndarray, compliance: np.ndarray, c_run: np.ndarray, starts: np.ndarray,
-          ends: np.ndarray, anchored_left: np.ndarray) -> float:
+def _sway(r: np.ndarray, compliance: np.ndarray, c_run: np.ndarray, run: Runs) -> float:
     """The largest displacement error (m) of :func:`propagate` (``r`` is overwritten): element
     e of a run stretches
     by (c − r_e)/k_e too much, and the nodes move by the running sum of that from the run's
     held end. The running sum over the chain once; per run only its largest and smallest
     value, since |x − a| over a run is largest at one of them (x − a is monotone in x, in
     floating point too)."""
+    starts, ends = run.starts, run.ends
     c = c_run[0] if c_run.size == 1 else np.repeat(c_run, ends - starts)
     # in r's own array (the caller's r is not read again): no new array over the chain
     elongation = np.subtract(c, r, out=r)
@@ -206,14 +206,14 @@ def _sway(r: np.ndarray, compliance: np.ndarray, c_run: np.ndarray, starts: np.n
     total = np.cumsum(elongation, out=elongation)
     base = total[starts] - first  # the sum before each run
     tail = total[ends - 1]  # ... and to its end
-    top, bottom = np.maximum.reduceat(total, starts), np.minimum.reduceat(total, starts)
+    top, bottom = run.reduce(np.maximum, total), run.reduce(np.minimum, total)
     # held at the left end: the nodes move by total − base; held only at the right end (a
     # bar's free head): by tail − (the sum before each element), base included and the run's
     # last value tail itself moving by 0
     from_left = np.maximum(np.abs(top - base), np.abs(bottom - base))
     from_right = np.maximum(np.maximum(np.abs(tail - top), np.abs(tail - bottom)),
                             np.abs(tail - base))
-    return largest(np.where(anchored_left, from_left, from_right))
+    return largest(np.where(run.left_held, from_left, from_right))
 
 
 def _release(layout: Layout, held: np.ndarray, pushing: np.ndarray, lam: np.ndarray,

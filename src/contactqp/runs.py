@@ -19,6 +19,7 @@ import numpy as np
 
 from contactqp.model import Layout, count_up_to
 
+LONG_RUNS = 64  # runs reduced one by one where at most one in this many is long
 KEPT_BYTES = 2**27  # what a layout keeps at most (128 MB; the oldest sets dropped first)
 
 
@@ -63,6 +64,19 @@ class Runs:
     run_of: np.ndarray
     held_start: np.ndarray
     held_end: np.ndarray
+    long: np.ndarray  # the runs of more than one element
+
+    def reduce(self, ufunc: np.ufunc, values: np.ndarray) -> np.ndarray:
+        """``ufunc.reduceat(values, starts)``: per run, over its elements. Where nearly every
+        run is one element (a pressed patch: 9.5·10⁴ runs, one long), those are the values
+        themselves and only the long runs are reduced, each by the same reduceat over its
+        slice (the same numbers bit for bit)."""
+        if self.long.size * LONG_RUNS > self.starts.size:
+            return ufunc.reduceat(values, self.starts)
+        out = values[self.starts]
+        for i in self.long.tolist():
+            out[i] = ufunc.reduceat(values[self.starts[i]: self.ends[i]], [0])[0]
+        return out
 
 
 def runs(layout: Layout, held: np.ndarray) -> Runs:
@@ -83,7 +97,7 @@ def _runs(layout: Layout, held: np.ndarray) -> Runs:
     run_of = count_at_or_before(element.size, starts, np.minimum(at, element.size - 1)) - 1
     made = Runs(starts, ends, left_held, right_held, first, last,
                 np.add.reduceat(compliance, starts), run_of, layout.bar_ends[0][held],
-                layout.bar_ends[1][held])
+                layout.bar_ends[1][held], np.flatnonzero(ends - starts > 1))
     for array in made.__dict__.values():
         array.flags.writeable = False
     return made
