@@ -39,10 +39,11 @@ class Bounds:
 
 def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarray,
                  nodes: np.ndarray, external: np.ndarray, r_max: float, contact: str,
-                 F: float, U: float, hold: float, outside: np.ndarray | None = None) -> Bounds:
+                 F: float, U: float, hold: float, outside: np.ndarray | None = None,
+                 u_size: float | None = None) -> Bounds:
     """The residuals and the error bounds of an answer (module docstring); a contact whose
     force passes ``hold`` × F counts as pushing when the held nodes are chosen. ``outside``:
-    the running sum of ``external`` over the nodes, when the caller has it.
+    the running sum of ``external`` over the nodes, ``u_size`` ‖u‖∞, when the caller has them.
 
     The answer is exact for a nearby scene: the rows that push are held at where the answer
     puts them (their gaps moved by δ = |penetration|), the other rows' forces and every
@@ -108,7 +109,7 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     # and the answer itself is only stored to a few units of round-off: a force of 2e8 N from
     # a press fit on a stiff element is one float step (3e-8 N) from any other
     force_bound += ROUND_OFF * max(largest(lam), largest(links), F)
-    displacement_bound += ROUND_OFF * max(largest(u), U)
+    displacement_bound += ROUND_OFF * max(largest(u) if u_size is None else u_size, U)
     if not equality:
         displacement_bound += _release(layout, held, pushing, lam, force_bound)
     if unpinned_bar(layout, pushing) is not None:  # the answer leaves a bar free to move

@@ -181,7 +181,8 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
     forces = element_forces(layout, u) if element_force is None else element_force
     links = link_forces(layout, forces)
     nodes, external, _ = external_forces(layout, lam, reactions)
-    finite = all(np.isfinite(a).all() for a in (u, lam, reactions))
+    u_size = largest(u)  # ‖u‖∞, inf where u has a NaN or an infinite value; read again below
+    finite = math.isfinite(u_size) and all(np.isfinite(a).all() for a in (lam, reactions))
     if not finite:  # a NaN or infinite answer: no residual can pass
         return _failed(contact, lam, F, U, tolerances)
     # E_j, the outside forces on nodes 0..j, once for both (where they are many)
@@ -189,7 +190,7 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
                if 8 * nodes.size > links.size else None)
     r_max = section_residual(links, nodes, external, outside)
     bounds = error_bounds(layout, u, lam, links, nodes, external, r_max, contact, F, U,
-                          tolerances.complementarity, outside)
+                          tolerances.complementarity, outside, u_size)
     residuals = {name: value for name, value in bounds.residuals.items()}
     failures = [
         f"{name} residual {value:.2e} > {getattr(tolerances, name):.0e}"
