@@ -429,8 +429,11 @@ class Layout:
     @cached_property
     def nodal_loads(self) -> np.ndarray:
         """The point loads and the distributed loads' nodal forces summed per global node (N)."""
+        if not self.scene.distributed:  # the same sums, in the same order, from zero
+            return _read_only(np.asarray(np.bincount(  # (no loads: integer zeros)
+                self.load_nodes, self.scene.load_forces, minlength=self.n_nodes), dtype=float))
         p = self.distributed_nodal_loads.copy()
-        np.add.at(p, self.load_nodes, self.scene.load_forces)
+        np.add.at(p, self.load_nodes, self.scene.load_forces)  # ~0.1 µs a load
         return _read_only(p)
 
     def load_point(self) -> int:
