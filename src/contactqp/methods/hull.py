@@ -50,6 +50,7 @@ class WallsOnChain:
         self.model = model
         self.phi = layout.chained_compliance  # φ along the whole chain, increasing
         self.bar = layout.node_bar
+        self.bars = len(model.scene.bars)
         offsets = layout.node_offsets
         self.bar_start = np.zeros(n, dtype=bool)
         self.bar_start[offsets[:-1]] = True
@@ -64,6 +65,7 @@ class WallsOnChain:
         # ... and the nodes that have a wall on each side, sorted: the steps read the chain
         # there only (one wall on 10⁶ nodes: no pass over the chain per side and step)
         self.wall_nodes = layout.wall_nodes_by_side
+        self._wall_gaps: dict[int, np.ndarray] = {}
         self.n = n
         self.n_rows = model.n_contacts
         P = scaled(layout.nodal_loads)
@@ -85,13 +87,16 @@ class WallsOnChain:
         pinned = self.support | held[1] | held[-1]
         nodes = np.flatnonzero(pinned)
         plus, minus = held[1][nodes], held[-1][nodes]  # the held nodes' walls, not the chain's
-        target = np.where(plus, self.bound[1][nodes],
-                          np.where(minus, -self.bound[-1][nodes], 0.0))
-        w_held = self.u_free[nodes] - target
-        bar = self.bar[nodes]
+        target = np.zeros(nodes.size)
+        target[plus] = self.bound[1][nodes[plus]]
+        target[minus] = -self.bound[-1][nodes[minus]]
+        w_held = self.u_free[nodes]
+        w_held -= target
+        bar = self.bar[nodes] if self.bars > 1 else np.zeros(nodes.size, dtype=np.intp)
         first, last = run_starts(bar), run_ends(bar)  # each bar's first and last held node
         if w_held.any():
-            u = self.u_free - spread(self.model.layout, nodes, w_held)
+            u = self.spread(nodes, w_held)
+            np.subtract(self.u_free, u, out=u)
         else:  # the supports alone (the first step): u is u_free, with no pass to spread 0
             u = self.u_free.copy()
         u[nodes] = target  # exactly, not u_free − (u_free − target)
@@ -105,19 +110,36 @@ class WallsOnChain:
         c = self.link_compliance
         sum_c = np.add.reduceat(c, nodes)[:-1]
         sum_cS = np.add.reduceat(self.compliance_load, nodes)[:-1]
-        a, b = nodes[:-1], nodes[1:]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            N_a = (target[1:] - target[:-1] + sum_cS - S[a] * sum_c) / sum_c
+        S_a, S_before_b = S[nodes[:-1]], S[nodes[1:] - 1]
+        # N_a = (target_b − target_a + Σ c S − S_a Σ c) / Σ c, in place (no array per term)
+        right = np.empty(nodes.size)
+        N_a = np.subtract(target[1:], target[:-1], out=right[:-1])
+        with np.errstate(divide="ignore", invalid="ignore"):  # inf and NaN across a junction
+            N_a += sum_cS
+            N_a -= np.multiply(S_a, sum_c, out=sum_cS)
+            N_a /= sum_c
+        right[-1] = 0.0
         # the element forces just right and just left of every held node
-        right = np.append(N_a, 0.0)
-        left = np.concatenate(([0.0], N_a - (S[b - 1] - S[a])))
+        left = np.empty(nodes.size)
+        left[0] = 0.0
+        np.subtract(N_a, np.subtract(S_before_b, S_a, out=S_before_b), out=left[1:])
         head, tail = self.head_load(nodes[first]), self.tail_load(nodes[last])
         left[first] = head  # − the loads from the bar's start up to the element before
         right[last] = tail  # the loads beyond the node
-        reaction = left - right - self.loads[nodes]
+        reaction = np.subtract(left, right, out=left)
+        reaction -= self.loads[nodes]
         # a + wall pushes in -x (its force is −R), a - wall in +x
-        force = np.where(plus, -reaction, reaction)
+        force = np.negative(reaction, out=reaction, where=plus)
         return u, nodes, force, pinned
+
+    def spread(self, nodes: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """:func:`contactqp.model.spread` (the same numbers): on one bar, its points made in
+        order, without the sort that places each bar's ends among several bars' anchors."""
+        if self.bars > 1:
+            return spread(self.model.layout, nodes, values)
+        phi = self.phi
+        x = np.concatenate((phi[:1], phi[nodes], phi[-1:]))
+        return np.interp(phi, x, np.concatenate((values[:1], values, values[-1:])))
 
     def head_load(self, nodes: np.ndarray) -> np.ndarray:
         """The force in the element just left of each of ``nodes``, the first held node of its
@@ -137,44 +159,134 @@ class WallsOnChain:
         """The nodes (sorted) not held whose wall on ``side`` ``u`` passes by more than
         ``tolerance``."""
         nodes = self.wall_nodes[side]
-        return nodes[(self.bound[side][nodes] - side * u[nodes] < -tolerance) & ~pinned[nodes]]
+        gap = u[nodes]  # then the signed gap, bound − side·u, in its place
+        gap = (np.subtract if side > 0 else np.add)(self.wall_gap(side), gap, out=gap)
+        return nodes[(gap < -tolerance) & ~pinned[nodes]]
+
+    def wall_gap(self, side: int) -> np.ndarray:
+        """The gap of each wall on ``side``, in the order of :attr:`wall_nodes` (made on the
+        first step that reads it)."""
+        gaps = self._wall_gaps.get(side)
+        if gaps is None:
+            gaps = self._wall_gaps[side] = self.bound[side][self.wall_nodes[side]]
+        return gaps
 
     def add_hull_walls(self, side: int, u: np.ndarray, pinned: np.ndarray, passed: np.ndarray,
-                       tolerance: float) -> np.ndarray:
-        """The walls on ``side`` to add: the vertices of each passed stretch's greatest convex
-        minorant of its signed gaps (module docstring); ``passed``: the passed nodes, sorted."""
+                       tolerance: float) -> dict[int, list[np.ndarray]]:
+        """The walls to add, per side: on ``side``, the vertices of each passed stretch's
+        greatest convex minorant of its signed gaps (module docstring); ``passed``: the passed
+        nodes, sorted. Within each stretch the new walls are then settled at once
+        (:meth:`settle`), which may add walls on the other side too."""
         bound, walled = self.bound[side], self.wall_nodes[side]
-
-        def signed_gap(nodes: np.ndarray) -> np.ndarray:  # < 0 where passed
-            return bound[nodes] - side * u[nodes]
-
         run = count_up_to(pinned | self.bar_start)  # a stretch per held node or bar start
-        adding = np.zeros(self.n, dtype=bool)
+        adding: dict[int, list[np.ndarray]] = {1: [], -1: []}
         stretch_of = run[passed]
         stretches = stretch_of[run_starts(stretch_of)]
         begin = np.searchsorted(run, stretches, side="left")
         finish = np.searchsorted(run, stretches, side="right")
         for a, b in zip(begin.tolist(), finish.tolist()):
             # nodes a..b-1 share the stretch; a is held (the left anchor) or a bar's start
-            anchored_left = bool(pinned[a])
-            inner = a + 1 if anchored_left else a
-            anchored_right = b < self.n and not self.bar_start[b] and bool(pinned[b])
+            left = a if pinned[a] else None
+            right = b if b < self.n and not self.bar_start[b] and pinned[b] else None
+            inner = a + 1 if left is not None else a
             nodes = walled[np.searchsorted(walled, inner): np.searchsorted(walled, b)]
-            if nodes.size == 1:  # one wall in the stretch: the minorant's only vertex
-                adding[nodes[signed_gap(nodes) < -tolerance]] = True
-                continue
-            x, y = self.phi[nodes], signed_gap(nodes)
-            if anchored_left:
-                x, y = np.concatenate(([self.phi[a]], x)), np.concatenate(([0.0], y))
-            if anchored_right:
-                x, y = np.append(x, self.phi[b]), np.append(y, 0.0)
-            clip = 0 if anchored_left and anchored_right else (-1 if anchored_left else 1)
-            vertices = minorant_vertices(x, y, clip)
-            vertices -= int(anchored_left)
-            vertices = vertices[(vertices >= 0) & (vertices < nodes.size)]
-            chosen = nodes[vertices]
-            adding[chosen[signed_gap(chosen) < -tolerance]] = True
+            chosen = self.stretch_walls(side, nodes, bound[nodes] - side * u[nodes], left,
+                                        right, tolerance)
+            adding[side].append(chosen)
+            ends = Stretch(inner, b, left, right,
+                           None if left is None else self.u_free[left] - u[left],
+                           None if right is None else self.u_free[right] - u[right])
+            self.settle(side, chosen, ends, tolerance, adding)
         return adding
+
+    def stretch_walls(self, side: int, nodes: np.ndarray, gaps: np.ndarray, left: int | None,
+                      right: int | None, tolerance: float) -> np.ndarray:
+        """The walls on ``side`` to add in one stretch: the vertices of the greatest convex
+        minorant of the signed ``gaps`` (< 0 where passed) at its walled ``nodes``, the held
+        ends ``left`` and ``right`` (None: a free end) at 0, that are passed."""
+        if nodes.size == 1:  # one wall in the stretch: the minorant's only vertex
+            return nodes[gaps < -tolerance]
+        x, y = self.phi[nodes], gaps
+        if left is not None:
+            x, y = np.concatenate(([self.phi[left]], x)), np.concatenate(([0.0], y))
+        if right is not None:
+            x, y = np.append(x, self.phi[right]), np.append(y, 0.0)
+        clip = 0 if left is not None and right is not None else (-1 if left is not None else 1)
+        vertices = minorant_vertices(x, y, clip)
+        vertices -= int(left is not None)
+        vertices = vertices[(vertices >= 0) & (vertices < nodes.size)]
+        return nodes[vertices[gaps[vertices] < -tolerance]]
+
+    def settle(self, side: int, chosen: np.ndarray, ends: Stretch, tolerance: float,
+               adding: dict[int, list[np.ndarray]]) -> None:
+        """Add to ``adding`` the walls that the stretch ``ends`` needs once the walls
+        ``chosen`` on ``side`` hold: the stretch's displacements between its held nodes follow
+        from statics alone (linear in φ, module docstring), so where they now pass the other
+        side's walls, that side's hull walls are added in each sub-stretch between held
+        nodes, and so on, side after side, until nothing in the stretch is passed. A step
+        then settles a stretch that the steps would otherwise settle one side at a time."""
+        work = [(side, chosen, ends)]
+        for _ in range(MAX_SETTLING):
+            if not work:
+                return
+            side, chosen, ends = work.pop()
+            other = -side
+            if not chosen.size or other not in self.sides:
+                continue
+            walled = self.wall_nodes[other]
+            nodes = walled[np.searchsorted(walled, ends.first): np.searchsorted(walled, ends.stop)]
+            # each node's sub-stretch k, between chosen k − 1 and k: the chosen before it
+            chosen_here = np.zeros(ends.stop - ends.first, dtype=bool)
+            chosen_here[chosen - ends.first] = True
+            nodes = nodes[~chosen_here[nodes - ends.first]]
+            part = count_up_to(chosen_here)[nodes - ends.first]
+            anchors, w = ends.anchors(chosen, self.u_free[chosen] - side * self.bound[side][chosen])
+            u = self.u_free[nodes] - np.interp(self.phi[nodes], self.phi[anchors], w)
+            gaps = self.bound[other][nodes] - other * u
+            passed = gaps < -tolerance
+            if not passed.any():
+                continue
+            parts = part[passed]
+            for k in parts[run_starts(parts)].tolist():
+                sub = ends.between(chosen, k, w)
+                mine = part == k
+                found = self.stretch_walls(other, nodes[mine], gaps[mine], sub.left, sub.right,
+                                           tolerance)
+                adding[other].append(found)
+                work.append((other, found, sub))
+
+
+class Stretch:
+    """Nodes ``first`` .. ``stop`` − 1 between the held nodes ``left`` and ``right`` (None: a
+    free end there), and w = u_free − u at those two (None at a free end)."""
+
+    def __init__(self, first: int, stop: int, left: int | None, right: int | None,
+                 w_left: float | None, w_right: float | None) -> None:
+        self.first, self.stop, self.left, self.right = first, stop, left, right
+        self.w_left, self.w_right = w_left, w_right
+
+    def anchors(self, inner: np.ndarray, w_inner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The held nodes of the stretch with ``inner`` held too, in order, and w at each."""
+        nodes, w = [inner], [w_inner]
+        if self.left is not None:
+            nodes.insert(0, [self.left])
+            w.insert(0, [self.w_left])
+        if self.right is not None:
+            nodes.append([self.right])
+            w.append([self.w_right])
+        return np.concatenate(nodes).astype(np.intp), np.concatenate(w)
+
+    def between(self, inner: np.ndarray, k: int, w_inner: np.ndarray) -> Stretch:
+        """The sub-stretch between held nodes ``inner`` k − 1 and k (the ends beyond them)."""
+        left = self.left if k == 0 else int(inner[k - 1])
+        right = self.right if k == inner.size else int(inner[k])
+        return Stretch(self.first if k == 0 else left + 1, self.stop if k == inner.size else right,
+                       left, right,
+                       self.w_left if k == 0 else float(w_inner[k - 1]),
+                       self.w_right if k == inner.size else float(w_inner[k]))
+
+
+MAX_SETTLING = 4096  # sub-stretches settled at most per stretch and step (the steps go on)
 
 
 def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
@@ -185,12 +297,16 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
     (a free end on the left); 0: both ends held (the first and last points, at 0)."""
     if x.size < 2:
         return np.zeros(x.size, dtype=np.intp)
-    slope = minorant_slopes(x, y)
+    hull = _hull_corners(x, y)
+    if hull is None:  # rare: a very lopsided hull; the slope of every step from scipy
+        corners, slope = np.arange(x.size), _isotonic_slopes(x, y)
+    else:  # the slope of each segment between the hull's corners
+        corners, slope = hull
     if clip < 0:
         slope = np.minimum(slope, 0.0)
     elif clip > 0:
         slope = np.maximum(slope, 0.0)
-    vertices = np.flatnonzero(slope[1:] != slope[:-1]) + 1
+    vertices = corners[1:-1][slope[1:] != slope[:-1]]
     if clip > 0 and slope[0] > 0.0:  # the minorant rises from the first point: its lowest
         vertices = np.concatenate(([0], vertices))
     if clip < 0 and slope[-1] < 0.0:  # the minorant falls to the last point: its lowest
@@ -208,32 +324,55 @@ def minorant_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """The slope of the greatest convex minorant of the points (x, y) (x increasing) over
     each step of x: the weighted isotonic regression of the steps' slopes (weights the steps
     of x) that scipy.optimize.isotonic_regression gives, found as the lower hull instead
-    (importing scipy.optimize takes 0.2-0.3 s, on the first solve of every process that
-    meets a passed wall). A point where the slope does not rise is no vertex of the hull, and
-    dropping all such points at once leaves the hull as it is: one such pass leaves convex
-    runs between a few dents (the channel, the flat patch), joined by their common tangents
-    (:func:`_join_convex_runs`); many dents go to a quickhull (:func:`_lower_hull`)."""
-    corners = np.arange(x.size)
+    (:func:`_hull_corners`; importing scipy.optimize takes 0.2-0.3 s, on the first solve of
+    every process that meets a passed wall)."""
+    hull = _hull_corners(x, y)
+    if hull is None:
+        return _isotonic_slopes(x, y)
+    corners, slope = hull
+    return np.repeat(slope, np.diff(corners))
+
+
+def _hull_corners(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The corners of the lower hull of the points (x, y) (indices, increasing, the first and
+    the last among them) and the slope between each two, or None for a lopsided hull. A point
+    where the slope does not rise is no corner, and dropping all such points at once leaves
+    the hull as it is: one such pass leaves convex runs between a few dents (the channel,
+    the flat patch), joined by their common tangents (:func:`_join_convex_runs`); many dents
+    go to a quickhull (:func:`_lower_hull`)."""
+    corners = None  # all the points (read in place, not gathered)
     for _ in range(PRUNING_PASSES):
-        slope = np.diff(y[corners]) / np.diff(x[corners])
+        if corners is None:
+            slope = np.diff(y) / np.diff(x)
+        else:
+            slope = np.diff(y[corners]) / np.diff(x[corners])
         rises = slope[1:] > slope[:-1]
         if rises.all():
-            return np.repeat(slope, np.diff(corners))
-        corners = corners[np.concatenate(([True], rises, [True]))]
+            return np.arange(x.size) if corners is None else corners, slope
+        keep = np.concatenate(([True], rises, [True]))
+        corners = np.flatnonzero(keep) if corners is None else corners[keep]
+    if corners is None:
+        corners = np.arange(x.size)
     # what is left is convex but at a few points (each pass above dropped one point there):
     # join its convex runs by their common tangents; many such points, a quickhull
     slope = np.diff(y[corners]) / np.diff(x[corners])
     dents = np.flatnonzero(slope[1:] <= slope[:-1]) + 1  # no corner there
     if dents.size == 0:  # the last pass left only corners
-        return np.repeat(slope, np.diff(corners))
+        return corners, slope
     joined = _join_convex_runs(x, y, corners, dents) if dents.size <= MAX_JOINS else None
     corners = _lower_hull(x, y, corners) if joined is None else joined
-    if corners is None:  # rare: a very lopsided hull
-        from scipy.optimize import isotonic_regression
+    if corners is None:
+        return None
+    return corners, np.diff(y[corners]) / np.diff(x[corners])
 
-        dx = np.diff(x)
-        return isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
-    return np.repeat(np.diff(y[corners]) / np.diff(x[corners]), np.diff(corners))
+
+def _isotonic_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The minorant's slope over every step of x by scipy (the weighted isotonic regression
+    of the steps' slopes)."""
+    from scipy.optimize import isotonic_regression
+
+    dx = np.diff(x)
+    return isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
 
 
 def _join_convex_runs(x: np.ndarray, y: np.ndarray, corners: np.ndarray,
@@ -337,7 +476,10 @@ def solve_hull(model: Model, *, max_iterations: int | None = None, load_factor: 
             held[side][pulling] = False
         for side, stretch in passed.items():
             if stretch.size:
-                held[side] |= chain.add_hull_walls(side, u, pinned, stretch, disp_tol)
+                for held_side, found in chain.add_hull_walls(side, u, pinned, stretch,
+                                                             disp_tol).items():
+                    for nodes in found:
+                        held[held_side][nodes] = True
         held[-1] &= ~held[1]
     active = np.zeros(chain.n_rows, dtype=bool)
     for side in (1, -1):
@@ -351,5 +493,10 @@ def _solution(chain: WallsOnChain, u: np.ndarray, nodes: np.ndarray, force: np.n
     for side in (1, -1):
         mine = held[side][nodes]
         contact_force[chain.owner[side][nodes[mine]]] = force[mine]
-    return Solution(u[chain.model.free], contact_force, solver="lagrange", iterations=steps,
+    free = chain.model.free
+    if free.size and free[-1] - free[0] + 1 == free.size:  # the free nodes are one range
+        u_free = u[free[0]: free[-1] + 1]
+    else:
+        u_free = u[free]
+    return Solution(u_free, contact_force, solver="lagrange", iterations=steps,
                     info={"active_set": "hull"})
