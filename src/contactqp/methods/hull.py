@@ -95,11 +95,10 @@ class WallsOnChain:
         bar = self.bar[nodes] if self.bars > 1 else np.zeros(nodes.size, dtype=np.intp)
         first, last = run_starts(bar), run_ends(bar)  # each bar's first and last held node
         if w_held.any():
-            u = self.spread(nodes, w_held)
-            np.subtract(self.u_free, u, out=u)
-        else:  # the supports alone (the first step): u is u_free, with no pass to spread 0
-            u = self.u_free.copy()
-        u[nodes] = target  # exactly, not u_free − (u_free − target)
+            u = self.displacements(pinned, nodes, w_held)
+            u[nodes] = target  # exactly, not u_free − (u_free − target)
+        else:  # the supports alone (the first step): u is u_free, read, not copied
+            u = self.u_free
         # the forces by statics from the loads, never from differences of displacements
         # (a wall in a patch carries its node's load, q·h, while the displacements and the
         # element forces beside it are 10⁶ times larger; measured: slopes of w left 8e-5 of
@@ -132,14 +131,26 @@ class WallsOnChain:
         force = np.negative(reaction, out=reaction, where=plus)
         return u, nodes, force, pinned
 
-    def spread(self, nodes: np.ndarray, values: np.ndarray) -> np.ndarray:
-        """:func:`contactqp.model.spread` (the same numbers): on one bar, its points made in
-        order, without the sort that places each bar's ends among several bars' anchors."""
+    def displacements(self, pinned: np.ndarray, nodes: np.ndarray, w_held: np.ndarray
+                      ) -> np.ndarray:
+        """u = u_free − w, w spread from its values ``w_held`` at the held ``nodes`` (the
+        mask ``pinned``) as :func:`contactqp.model.spread` spreads it (the same numbers), but
+        worked out at the nodes not held alone where those are few (a patch: 5 % of the
+        nodes); u at the held nodes is left for the caller."""
         if self.bars > 1:
-            return spread(self.model.layout, nodes, values)
+            u = spread(self.model.layout, nodes, w_held)
+            return np.subtract(self.u_free, u, out=u)
+        # on one bar its ends and held nodes are in order: no sort as spread's among bars
         phi = self.phi
         x = np.concatenate((phi[:1], phi[nodes], phi[-1:]))
-        return np.interp(phi, x, np.concatenate((values[:1], values, values[-1:])))
+        w = np.concatenate((w_held[:1], w_held, w_held[-1:]))
+        if 4 * nodes.size < self.n:  # most nodes free: interpolate along the whole chain
+            u = np.interp(phi, x, w)
+            return np.subtract(self.u_free, u, out=u)
+        free = np.flatnonzero(~pinned)
+        u = np.empty(self.n)
+        u[free] = self.u_free[free] - np.interp(phi[free], x, w)
+        return u
 
     def head_load(self, nodes: np.ndarray) -> np.ndarray:
         """The force in the element just left of each of ``nodes``, the first held node of its
@@ -171,23 +182,33 @@ class WallsOnChain:
             gaps = self._wall_gaps[side] = self.bound[side][self.wall_nodes[side]]
         return gaps
 
-    def add_hull_walls(self, side: int, u: np.ndarray, pinned: np.ndarray, passed: np.ndarray,
-                       tolerance: float) -> dict[int, list[np.ndarray]]:
+    def add_hull_walls(self, side: int, u: np.ndarray, held_nodes: np.ndarray,
+                       passed: np.ndarray, tolerance: float) -> dict[int, list[np.ndarray]]:
         """The walls to add, per side: on ``side``, the vertices of each passed stretch's
-        greatest convex minorant of its signed gaps (module docstring); ``passed``: the passed
-        nodes, sorted. Within each stretch the new walls are then settled at once
-        (:meth:`settle`), which may add walls on the other side too."""
+        greatest convex minorant of its signed gaps (module docstring); ``held_nodes``: the
+        held nodes and supports, ``passed``: the passed nodes, both sorted. Within each
+        stretch the new walls are then settled at once (:meth:`settle`), which may add walls
+        on the other side too."""
         bound, walled = self.bound[side], self.wall_nodes[side]
-        run = count_up_to(pinned | self.bar_start)  # a stretch per held node or bar start
         adding: dict[int, list[np.ndarray]] = {1: [], -1: []}
-        stretch_of = run[passed]
-        stretches = stretch_of[run_starts(stretch_of)]
-        begin = np.searchsorted(run, stretches, side="left")
-        finish = np.searchsorted(run, stretches, side="right")
-        for a, b in zip(begin.tolist(), finish.tolist()):
+        # each passed node's stretch, from the held nodes either side of it in its bar (by
+        # bisection: no pass over the chain), else its bar's ends; every bar has a support
+        after = np.searchsorted(held_nodes, passed)  # the first held node after each
+        first = run_starts(after)  # the first passed node of each stretch
+        if self.bars > 1:
+            first |= run_starts(self.bar[passed])
+        passed, after = passed[first], after[first]
+        start, stop = self.bar_first[passed], self.bar_last[passed] + 1
+        before = held_nodes[np.maximum(after - 1, 0)]
+        anchored_left = (after > 0) & (before >= start)
+        after = held_nodes[np.minimum(after, held_nodes.size - 1)]
+        anchored_right = (after > passed) & (after < stop)
+        for a, b, held_left, held_right in zip(np.where(anchored_left, before, start).tolist(),
+                                               np.where(anchored_right, after, stop).tolist(),
+                                               anchored_left.tolist(), anchored_right.tolist()):
             # nodes a..b-1 share the stretch; a is held (the left anchor) or a bar's start
-            left = a if pinned[a] else None
-            right = b if b < self.n and not self.bar_start[b] and pinned[b] else None
+            left = a if held_left else None
+            right = b if held_right else None
             inner = a + 1 if left is not None else a
             nodes = walled[np.searchsorted(walled, inner): np.searchsorted(walled, b)]
             chosen = self.stretch_walls(side, nodes, bound[nodes] - side * u[nodes], left,
@@ -476,10 +497,10 @@ def solve_hull(model: Model, *, max_iterations: int | None = None, load_factor: 
             held[side][pulling] = False
         for side, stretch in passed.items():
             if stretch.size:
-                for held_side, found in chain.add_hull_walls(side, u, pinned, stretch,
+                for held_side, found in chain.add_hull_walls(side, u, nodes, stretch,
                                                              disp_tol).items():
-                    for nodes in found:
-                        held[held_side][nodes] = True
+                    for new in found:
+                        held[held_side][new] = True
         held[-1] &= ~held[1]
     active = np.zeros(chain.n_rows, dtype=bool)
     for side in (1, -1):
@@ -496,6 +517,8 @@ def _solution(chain: WallsOnChain, u: np.ndarray, nodes: np.ndarray, force: np.n
     free = chain.model.free
     if free.size and free[-1] - free[0] + 1 == free.size:  # the free nodes are one range
         u_free = u[free[0]: free[-1] + 1]
+        if u is chain.u_free:  # no wall held: the Solution's own copy
+            u_free = u_free.copy()
     else:
         u_free = u[free]
     return Solution(u_free, contact_force, solver="lagrange", iterations=steps,
