@@ -83,7 +83,8 @@ class WallsOnChain:
                                                            np.ndarray, np.ndarray]:
         """u with the walls ``held`` (side -> mask) at their gaps; returns (u, held node
         numbers in order, the force of each held node's wall (N, >= 0 when it pushes), the
-        mask of the held nodes and supports)."""
+        mask of the held nodes and supports). With no wall held the forces are left 0: only
+        the supports' would be found, and a support's force is never read (it may pull)."""
         pinned = self.support | held[1] | held[-1]
         nodes = np.flatnonzero(pinned)
         plus, minus = held[1][nodes], held[-1][nodes]  # the held nodes' walls, not the chain's
@@ -99,6 +100,8 @@ class WallsOnChain:
             u[nodes] = target  # exactly, not u_free − (u_free − target)
         else:  # the supports alone (the first step): u is u_free, read, not copied
             u = self.u_free
+        if not (plus.any() or minus.any()):  # no wall held: no pass for the supports' forces
+            return u, nodes, np.zeros(nodes.size), pinned
         # the forces by statics from the loads, never from differences of displacements
         # (a wall in a patch carries its node's load, q·h, while the displacements and the
         # element forces beside it are 10⁶ times larger; measured: slopes of w left 8e-5 of
@@ -142,14 +145,56 @@ class WallsOnChain:
             return np.subtract(self.u_free, u, out=u)
         # on one bar its ends and held nodes are in order: no sort as spread's among bars
         phi = self.phi
-        x = np.concatenate((phi[:1], phi[nodes], phi[-1:]))
-        w = np.concatenate((w_held[:1], w_held, w_held[-1:]))
+        if nodes.size <= FEW_HELD:
+            x = np.concatenate((phi[:1], phi[nodes], phi[-1:]))
+            w = np.concatenate((w_held[:1], w_held, w_held[-1:]))
+            return self._displacements_by_segment(x, w, np.concatenate(([-1], nodes, [self.n])))
         if 4 * nodes.size < self.n:  # most nodes free: interpolate along the whole chain
-            u = np.interp(phi, x, w)
+            u = np.interp(phi, np.concatenate((phi[:1], phi[nodes], phi[-1:])),
+                          np.concatenate((w_held[:1], w_held, w_held[-1:])))
             return np.subtract(self.u_free, u, out=u)
         free = np.flatnonzero(~pinned)
         u = np.empty(self.n)
-        u[free] = self.u_free[free] - np.interp(phi[free], x, w)
+        u[free] = self.u_free[free] - self._interpolate_free(free, nodes, w_held)
+        return u
+
+    def _interpolate_free(self, free: np.ndarray, nodes: np.ndarray, w_held: np.ndarray
+                          ) -> np.ndarray:
+        """w at the nodes ``free`` (none of them held) of one bar: numpy.interp over the
+        bar's ends and held ``nodes`` (w flat beyond the outermost), with numpy's arithmetic
+        (slope·(φ − x_k) + w_k, and w_k itself where φ = x_k or at the bar's last node), but
+        with arrays the size of ``free`` only (no copy of φ and w at every held node)."""
+        phi, last = self.phi, nodes.size - 1
+        after = np.searchsorted(nodes, free)  # the held node after each (nodes.size: none)
+        before = np.maximum(after - 1, 0)
+        x_left = np.where(after > 0, phi[nodes[before]], phi[0])
+        w_left = w_held[before]  # flat before the first held node: its w
+        right = np.minimum(after, last)
+        x_right = np.where(after <= last, phi[nodes[right]], phi[-1])
+        w_right = w_held[right]
+        x = phi[free]
+        w = (w_right - w_left) / (x_right - x_left) * (x - x_left) + w_left
+        exact = (x == x_left) | ((after > last) & (x == x_right))
+        if exact.any():  # where numpy.interp returns a point's own w
+            w[exact] = np.where(x == x_left, w_left, w_right)[exact]
+        return w
+
+    def _displacements_by_segment(self, x: np.ndarray, w: np.ndarray, at: np.ndarray
+                                  ) -> np.ndarray:
+        """u = u_free − w at the nodes strictly between the nodes ``at`` (−1 and n at the
+        ends), w linear in φ from (x, w) at each to the next: numpy.interp's arithmetic,
+        slope·(φ − x_k) + w_k, segment by segment in place (3 ms → 0.5 ms on 10⁶ nodes: no
+        search for each node's segment)."""
+        u = np.empty(self.n)
+        for k in range(at.size - 1):
+            a, b = int(at[k]) + 1, int(at[k + 1])
+            if a >= b:
+                continue
+            slope = (w[k + 1] - w[k]) / (x[k + 1] - x[k])
+            part = np.subtract(self.phi[a:b], x[k], out=u[a:b])
+            part *= slope
+            part += w[k]
+            np.subtract(self.u_free[a:b], part, out=part)
         return u
 
     def head_load(self, nodes: np.ndarray) -> np.ndarray:
@@ -170,6 +215,13 @@ class WallsOnChain:
         """The nodes (sorted) not held whose wall on ``side`` ``u`` passes by more than
         ``tolerance``."""
         nodes = self.wall_nodes[side]
+        first = int(nodes[0])
+        if nodes[-1] - first + 1 == nodes.size:  # one run of nodes (a wall at every node)
+            at = slice(first, first + nodes.size)
+            gap = (np.subtract if side > 0 else np.add)(self.wall_gap(side), u[at])
+            gap = gap < -tolerance
+            gap &= ~pinned[at]
+            return np.flatnonzero(gap) + first
         gap = u[nodes]  # then the signed gap, bound − side·u, in its place
         gap = (np.subtract if side > 0 else np.add)(self.wall_gap(side), gap, out=gap)
         return nodes[(gap < -tolerance) & ~pinned[nodes]]
@@ -307,6 +359,7 @@ class Stretch:
                        self.w_right if k == inner.size else float(w_inner[k]))
 
 
+FEW_HELD = 32  # held nodes on one bar up to which u is worked out segment by segment
 MAX_SETTLING = 4096  # sub-stretches settled at most per stretch and step (the steps go on)
 
 
