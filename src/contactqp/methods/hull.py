@@ -137,47 +137,26 @@ class WallsOnChain:
     def displacements(self, pinned: np.ndarray, nodes: np.ndarray, w_held: np.ndarray
                       ) -> np.ndarray:
         """u = u_free − w, w spread from its values ``w_held`` at the held ``nodes`` (the
-        mask ``pinned``) as :func:`contactqp.model.spread` spreads it (the same numbers), but
-        worked out at the nodes not held alone where those are few (a patch: 5 % of the
-        nodes); u at the held nodes is left for the caller."""
+        mask ``pinned``) as :func:`contactqp.model.spread` spreads it (the same numbers); on
+        one bar worked out segment by segment where few nodes are held, and at the free
+        nodes alone where most are (a patch: 5 % of the nodes). u at the held nodes is left
+        for the caller."""
         if self.bars > 1:
             u = spread(self.model.layout, nodes, w_held)
             return np.subtract(self.u_free, u, out=u)
         # on one bar its ends and held nodes are in order: no sort as spread's among bars
         phi = self.phi
+        x = np.concatenate((phi[:1], phi[nodes], phi[-1:]))
+        w = np.concatenate((w_held[:1], w_held, w_held[-1:]))
         if nodes.size <= FEW_HELD:
-            x = np.concatenate((phi[:1], phi[nodes], phi[-1:]))
-            w = np.concatenate((w_held[:1], w_held, w_held[-1:]))
             return self._displacements_by_segment(x, w, np.concatenate(([-1], nodes, [self.n])))
         if 4 * nodes.size < self.n:  # most nodes free: interpolate along the whole chain
-            u = np.interp(phi, np.concatenate((phi[:1], phi[nodes], phi[-1:])),
-                          np.concatenate((w_held[:1], w_held, w_held[-1:])))
+            u = np.interp(phi, x, w)
             return np.subtract(self.u_free, u, out=u)
         free = np.flatnonzero(~pinned)
         u = np.empty(self.n)
-        u[free] = self.u_free[free] - self._interpolate_free(free, nodes, w_held)
+        u[free] = self.u_free[free] - np.interp(phi[free], x, w)
         return u
-
-    def _interpolate_free(self, free: np.ndarray, nodes: np.ndarray, w_held: np.ndarray
-                          ) -> np.ndarray:
-        """w at the nodes ``free`` (none of them held) of one bar: numpy.interp over the
-        bar's ends and held ``nodes`` (w flat beyond the outermost), with numpy's arithmetic
-        (slope·(φ − x_k) + w_k, and w_k itself where φ = x_k or at the bar's last node), but
-        with arrays the size of ``free`` only (no copy of φ and w at every held node)."""
-        phi, last = self.phi, nodes.size - 1
-        after = np.searchsorted(nodes, free)  # the held node after each (nodes.size: none)
-        before = np.maximum(after - 1, 0)
-        x_left = np.where(after > 0, phi[nodes[before]], phi[0])
-        w_left = w_held[before]  # flat before the first held node: its w
-        right = np.minimum(after, last)
-        x_right = np.where(after <= last, phi[nodes[right]], phi[-1])
-        w_right = w_held[right]
-        x = phi[free]
-        w = (w_right - w_left) / (x_right - x_left) * (x - x_left) + w_left
-        exact = (x == x_left) | ((after > last) & (x == x_right))
-        if exact.any():  # where numpy.interp returns a point's own w
-            w[exact] = np.where(x == x_left, w_left, w_right)[exact]
-        return w
 
     def _displacements_by_segment(self, x: np.ndarray, w: np.ndarray, at: np.ndarray
                                   ) -> np.ndarray:
