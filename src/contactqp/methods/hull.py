@@ -252,17 +252,27 @@ class WallsOnChain:
         return adding
 
     def stretch_walls(self, side: int, nodes: np.ndarray, gaps: np.ndarray, left: int | None,
-                      right: int | None, tolerance: float) -> np.ndarray:
+                      right: int | None, tolerance: float, phi: np.ndarray | None = None
+                      ) -> np.ndarray:
         """The walls on ``side`` to add in one stretch: the vertices of the greatest convex
-        minorant of the signed ``gaps`` (< 0 where passed) at its walled ``nodes``, the held
-        ends ``left`` and ``right`` (None: a free end) at 0, that are passed."""
+        minorant of the signed ``gaps`` (< 0 where passed) at its walled ``nodes`` (``phi``:
+        φ there, if known), the held ends ``left`` and ``right`` (None: a free end) at 0,
+        that are passed."""
         if nodes.size == 1:  # one wall in the stretch: the minorant's only vertex
             return nodes[gaps < -tolerance]
-        x, y = self.phi[nodes], gaps
+        first = int(left is not None)  # the points: the held ends, each array made once
+        size = nodes.size + first + int(right is not None)
+        x, y = np.empty(size), np.empty(size)
+        inner = slice(first, first + nodes.size)
+        if phi is None:
+            np.take(self.phi, nodes, out=x[inner], mode="clip")
+        else:
+            x[inner] = phi
+        y[inner] = gaps
         if left is not None:
-            x, y = np.concatenate(([self.phi[left]], x)), np.concatenate(([0.0], y))
+            x[0], y[0] = self.phi[left], 0.0
         if right is not None:
-            x, y = np.append(x, self.phi[right]), np.append(y, 0.0)
+            x[-1], y[-1] = self.phi[right], 0.0
         clip = 0 if left is not None and right is not None else (-1 if left is not None else 1)
         vertices = minorant_vertices(x, y, clip)
         vertices -= int(left is not None)
@@ -293,17 +303,22 @@ class WallsOnChain:
             nodes = nodes[~chosen_here[nodes - ends.first]]
             part = count_up_to(chosen_here)[nodes - ends.first]
             anchors, w = ends.anchors(chosen, self.u_free[chosen] - side * self.bound[side][chosen])
-            u = self.u_free[nodes] - np.interp(self.phi[nodes], self.phi[anchors], w)
-            gaps = self.bound[other][nodes] - other * u
+            phi = self.phi[nodes]
+            gaps = np.interp(phi, self.phi[anchors], w)  # w, then u, then the signed gap
+            np.subtract(self.u_free[nodes], gaps, out=gaps)
+            (np.subtract if other > 0 else np.add)(self.bound[other][nodes], gaps, out=gaps)
             passed = gaps < -tolerance
             if not passed.any():
                 continue
             parts = part[passed]
-            for k in parts[run_starts(parts)].tolist():
+            parts = parts[run_starts(parts)]
+            # part rises along the stretch: each sub-stretch's nodes are one slice
+            begin = np.searchsorted(part, parts, side="left").tolist()
+            finish = np.searchsorted(part, parts, side="right").tolist()
+            for k, a, b in zip(parts.tolist(), begin, finish):
                 sub = ends.between(chosen, k, w)
-                mine = part == k
-                found = self.stretch_walls(other, nodes[mine], gaps[mine], sub.left, sub.right,
-                                           tolerance)
+                found = self.stretch_walls(other, nodes[a:b], gaps[a:b], sub.left, sub.right,
+                                           tolerance, phi[a:b])
                 adding[other].append(found)
                 work.append((other, found, sub))
 
