@@ -463,11 +463,12 @@ def _join_convex_runs(x: np.ndarray, y: np.ndarray, corners: np.ndarray,
         if run.size == 0:  # two dents side by side
             continue
         i, j = hull.size - 1, 0
+        x_run, y_run, x_hull, y_hull = x[run], y[run], x[hull], y[hull]  # read once a run
         for _ in range(HULL_LEVELS):
             with np.errstate(divide="ignore", invalid="ignore"):
-                to_run = (y[run] - y[hull[i]]) / (x[run] - x[hull[i]])
+                to_run = (y_run - y_hull[i]) / (x_run - x_hull[i])
                 j_new = run.size - 1 - int(np.argmin(to_run[::-1]))  # the last of a tie
-                from_hull = (y[run[j_new]] - y[hull]) / (x[run[j_new]] - x[hull])
+                from_hull = (y_run[j_new] - y_hull) / (x_run[j_new] - x_hull)
                 i_new = int(np.argmax(from_hull))  # the first of a tie
             if (i_new, j_new) == (i, j):
                 break
