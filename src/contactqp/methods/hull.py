@@ -99,8 +99,12 @@ class WallsOnChain:
         target[minus] = -self.bound[-1][nodes[minus]]
         w_held = self.u_free[nodes]
         w_held -= target
-        bar = self.bar[nodes] if self.bars > 1 else np.zeros(nodes.size, dtype=np.intp)
-        first, last = run_starts(bar), run_ends(bar)  # each bar's first and last held node
+        if self.bars > 1:  # each bar's first and last held node
+            bar = self.bar[nodes]
+            first, last = run_starts(bar), run_ends(bar)
+        else:
+            first, last = np.zeros(nodes.size, dtype=bool), np.zeros(nodes.size, dtype=bool)
+            first[0] = last[-1] = True
         if w_held.any():
             u = self.displacements(pinned, nodes, w_held)
             u[nodes] = target  # exactly, not u_free − (u_free − target)
