@@ -57,9 +57,6 @@ class WallsOnChain:
         self.phi = layout.chained_compliance  # φ along the whole chain, increasing
         self.bar = layout.node_bar
         self.bars = len(model.scene.bars)
-        offsets = layout.node_offsets
-        self.bar_start = np.zeros(n, dtype=bool)
-        self.bar_start[offsets[:-1]] = True
         self.support = layout.support_mask
         # scaled only when a condensed model scales its loads (a copy of each otherwise)
         scaled = (lambda a: a) if load_factor == 1.0 else (lambda a: load_factor * a)
