@@ -19,7 +19,7 @@ wall's force is the kink of w there. The same equations as the textbook loop
   follows from statics alone, so where it now passes the other side's walls, that side's
   hull walls are added in each such sub-stretch, and so on until nothing in the stretch is
   passed (a channel with walls on both sides took a step per side and swing: 7 steps on
-  ``channel(10**5)``, 3 now). The set the loop ends with is the same as when each step
+  ``channel(10**5)``, 2 now). The set the loop ends with is the same as when each step
   settled one side, but for walls that touch with no force (held or not, either is exact).
 
 The textbook loop adds every passed wall, so its active set crosses a contact patch a few
@@ -309,7 +309,8 @@ class WallsOnChain:
             chosen_here[chosen - ends.first] = True
             nodes = nodes[~chosen_here[nodes - ends.first]]
             part = count_up_to(chosen_here)[nodes - ends.first]
-            anchors, w = ends.anchors(chosen, self.u_free[chosen] - side * self.bound[side][chosen])
+            w_chosen = self.u_free[chosen] - side * self.bound[side][chosen]
+            anchors, w = ends.anchors(chosen, w_chosen)
             phi = self.phi[nodes]
             gaps = np.interp(phi, self.phi[anchors], w)  # w, then u, then the signed gap
             np.subtract(self.u_free[nodes], gaps, out=gaps)
@@ -323,7 +324,7 @@ class WallsOnChain:
             begin = np.searchsorted(part, parts, side="left").tolist()
             finish = np.searchsorted(part, parts, side="right").tolist()
             for k, a, b in zip(parts.tolist(), begin, finish):
-                sub = ends.between(chosen, k, w)
+                sub = ends.between(chosen, k, w_chosen)
                 found = self.stretch_walls(other, nodes[a:b], gaps[a:b], sub.left, sub.right,
                                            tolerance, phi[a:b])
                 adding[other].append(found)
