@@ -307,8 +307,14 @@ class WallsOnChain:
             # each node's sub-stretch k, between chosen k − 1 and k: the chosen before it
             chosen_here = np.zeros(ends.stop - ends.first, dtype=bool)
             chosen_here[chosen - ends.first] = True
-            nodes = nodes[~chosen_here[nodes - ends.first]]
-            part = count_up_to(chosen_here)[nodes - ends.first]
+            count = count_up_to(chosen_here)
+            if nodes.size == chosen_here.size:  # a wall at every node: no gather by node
+                free = ~chosen_here
+                nodes, part = nodes[free], count[free]
+            else:
+                local = nodes - ends.first
+                free = ~chosen_here[local]
+                nodes, part = nodes[free], count[local[free]]
             w_chosen = self.u_free[chosen] - side * self.bound[side][chosen]
             anchors, w = ends.anchors(chosen, w_chosen)
             phi = self.phi[nodes]
