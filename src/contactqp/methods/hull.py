@@ -14,7 +14,13 @@ wall's force is the kink of w there. The same equations as the textbook loop
   that stretch's signed gaps against φ: the held set that makes the stretch feasible with
   forces of the right sign at once, if its ends stay where they are. The minorant is an
   isotonic regression of the slopes (scipy.optimize.isotonic_regression, O(n)); a free end
-  clips its slopes (no force beyond the last contact).
+  clips its slopes (no force beyond the last contact);
+- the stretch is then settled within the same step: between its held nodes (old and new) u
+  follows from statics alone, so where it now passes the other side's walls, that side's
+  hull walls are added in each such sub-stretch, and so on until nothing in the stretch is
+  passed (a channel with walls on both sides took a step per side and swing: 7 steps on
+  ``channel(10**5)``, 2 now). The set the loop ends with is the same as when each step
+  settled one side, but for walls that touch with no force (held or not, either is exact).
 
 The textbook loop adds every passed wall, so its active set crosses a contact patch a few
 nodes per step (steps grow with the mesh); the hull adds a patch's walls in one step. Measured
@@ -50,9 +56,7 @@ class WallsOnChain:
         self.model = model
         self.phi = layout.chained_compliance  # φ along the whole chain, increasing
         self.bar = layout.node_bar
-        offsets = layout.node_offsets
-        self.bar_start = np.zeros(n, dtype=bool)
-        self.bar_start[offsets[:-1]] = True
+        self.bars = len(model.scene.bars)
         self.support = layout.support_mask
         # scaled only when a condensed model scales its loads (a copy of each otherwise)
         scaled = (lambda a: a) if load_factor == 1.0 else (lambda a: load_factor * a)
@@ -64,6 +68,7 @@ class WallsOnChain:
         # ... and the nodes that have a wall on each side, sorted: the steps read the chain
         # there only (one wall on 10⁶ nodes: no pass over the chain per side and step)
         self.wall_nodes = layout.wall_nodes_by_side
+        self._wall_gaps: dict[int, np.ndarray] = {}
         self.n = n
         self.n_rows = model.n_contacts
         P = scaled(layout.nodal_loads)
@@ -81,20 +86,29 @@ class WallsOnChain:
                                                            np.ndarray, np.ndarray]:
         """u with the walls ``held`` (side -> mask) at their gaps; returns (u, held node
         numbers in order, the force of each held node's wall (N, >= 0 when it pushes), the
-        mask of the held nodes and supports)."""
+        mask of the held nodes and supports). With no wall held the forces are left 0: only
+        the supports' would be found, and a support's force is never read (it may pull)."""
         pinned = self.support | held[1] | held[-1]
         nodes = np.flatnonzero(pinned)
         plus, minus = held[1][nodes], held[-1][nodes]  # the held nodes' walls, not the chain's
-        target = np.where(plus, self.bound[1][nodes],
-                          np.where(minus, -self.bound[-1][nodes], 0.0))
-        w_held = self.u_free[nodes] - target
-        bar = self.bar[nodes]
-        first, last = run_starts(bar), run_ends(bar)  # each bar's first and last held node
+        target = np.zeros(nodes.size)
+        target[plus] = self.bound[1][nodes[plus]]
+        target[minus] = -self.bound[-1][nodes[minus]]
+        w_held = self.u_free[nodes]
+        w_held -= target
+        if self.bars > 1:  # each bar's first and last held node
+            bar = self.bar[nodes]
+            first, last = run_starts(bar), run_ends(bar)
+        else:
+            first, last = np.zeros(nodes.size, dtype=bool), np.zeros(nodes.size, dtype=bool)
+            first[0] = last[-1] = True
         if w_held.any():
-            u = self.u_free - spread(self.model.layout, nodes, w_held)
-        else:  # the supports alone (the first step): u is u_free, with no pass to spread 0
-            u = self.u_free.copy()
-        u[nodes] = target  # exactly, not u_free − (u_free − target)
+            u = self.displacements(pinned, nodes, w_held)
+            u[nodes] = target  # exactly, not u_free − (u_free − target)
+        else:  # the supports alone (the first step): u is u_free, read, not copied
+            u = self.u_free
+        if not (plus.any() or minus.any()):  # no wall held: no pass for the supports' forces
+            return u, nodes, np.zeros(nodes.size), pinned
         # the forces by statics from the loads, never from differences of displacements
         # (a wall in a patch carries its node's load, q·h, while the displacements and the
         # element forces beside it are 10⁶ times larger; measured: slopes of w left 8e-5 of
@@ -105,19 +119,69 @@ class WallsOnChain:
         c = self.link_compliance
         sum_c = np.add.reduceat(c, nodes)[:-1]
         sum_cS = np.add.reduceat(self.compliance_load, nodes)[:-1]
-        a, b = nodes[:-1], nodes[1:]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            N_a = (target[1:] - target[:-1] + sum_cS - S[a] * sum_c) / sum_c
+        S_a, S_before_b = S[nodes[:-1]], S[nodes[1:] - 1]
+        # N_a = (target_b − target_a + Σ c S − S_a Σ c) / Σ c, in place (no array per term)
+        right = np.empty(nodes.size)
+        N_a = np.subtract(target[1:], target[:-1], out=right[:-1])
+        with np.errstate(divide="ignore", invalid="ignore"):  # inf and NaN across a junction
+            N_a += sum_cS
+            N_a -= np.multiply(S_a, sum_c, out=sum_cS)
+            N_a /= sum_c
+        right[-1] = 0.0
         # the element forces just right and just left of every held node
-        right = np.append(N_a, 0.0)
-        left = np.concatenate(([0.0], N_a - (S[b - 1] - S[a])))
+        left = np.empty(nodes.size)
+        left[0] = 0.0
+        np.subtract(N_a, np.subtract(S_before_b, S_a, out=S_before_b), out=left[1:])
         head, tail = self.head_load(nodes[first]), self.tail_load(nodes[last])
         left[first] = head  # − the loads from the bar's start up to the element before
         right[last] = tail  # the loads beyond the node
-        reaction = left - right - self.loads[nodes]
+        reaction = np.subtract(left, right, out=left)
+        reaction -= self.loads[nodes]
         # a + wall pushes in -x (its force is −R), a - wall in +x
-        force = np.where(plus, -reaction, reaction)
+        force = np.negative(reaction, out=reaction, where=plus)
         return u, nodes, force, pinned
+
+    def displacements(self, pinned: np.ndarray, nodes: np.ndarray, w_held: np.ndarray
+                      ) -> np.ndarray:
+        """u = u_free − w, w spread from its values ``w_held`` at the held ``nodes`` (the
+        mask ``pinned``) as :func:`contactqp.model.spread` spreads it (the same numbers); on
+        one bar worked out segment by segment where few nodes are held, and at the free
+        nodes alone where most are (a patch: 5 % of the nodes). u at the held nodes is left
+        for the caller."""
+        if self.bars > 1:
+            u = spread(self.model.layout, nodes, w_held)
+            return np.subtract(self.u_free, u, out=u)
+        # on one bar its ends and held nodes are in order: no sort as spread's among bars
+        phi = self.phi
+        x = np.concatenate((phi[:1], phi[nodes], phi[-1:]))
+        w = np.concatenate((w_held[:1], w_held, w_held[-1:]))
+        if nodes.size <= FEW_HELD:
+            return self._displacements_by_segment(x, w, np.concatenate(([-1], nodes, [self.n])))
+        if 4 * nodes.size < self.n:  # most nodes free: interpolate along the whole chain
+            u = np.interp(phi, x, w)
+            return np.subtract(self.u_free, u, out=u)
+        free = np.flatnonzero(~pinned)
+        u = np.empty(self.n)
+        u[free] = self.u_free[free] - np.interp(phi[free], x, w)
+        return u
+
+    def _displacements_by_segment(self, x: np.ndarray, w: np.ndarray, at: np.ndarray
+                                  ) -> np.ndarray:
+        """u = u_free − w at the nodes strictly between the nodes ``at`` (−1 and n at the
+        ends), w linear in φ from (x, w) at each to the next: numpy.interp's arithmetic,
+        slope·(φ − x_k) + w_k, segment by segment in place (3 ms → 0.5 ms on 10⁶ nodes: no
+        search for each node's segment)."""
+        u = np.empty(self.n)
+        for k in range(at.size - 1):
+            a, b = int(at[k]) + 1, int(at[k + 1])
+            if a >= b:
+                continue
+            slope = (w[k + 1] - w[k]) / (x[k + 1] - x[k])
+            part = np.subtract(self.phi[a:b], x[k], out=u[a:b])
+            part *= slope
+            part += w[k]
+            np.subtract(self.u_free[a:b], part, out=part)
+        return u
 
     def head_load(self, nodes: np.ndarray) -> np.ndarray:
         """The force in the element just left of each of ``nodes``, the first held node of its
@@ -137,44 +201,174 @@ class WallsOnChain:
         """The nodes (sorted) not held whose wall on ``side`` ``u`` passes by more than
         ``tolerance``."""
         nodes = self.wall_nodes[side]
-        return nodes[(self.bound[side][nodes] - side * u[nodes] < -tolerance) & ~pinned[nodes]]
+        first = int(nodes[0])
+        if nodes[-1] - first + 1 == nodes.size:  # one run of nodes (a wall at every node)
+            at = slice(first, first + nodes.size)
+            gap = (np.subtract if side > 0 else np.add)(self.wall_gap(side), u[at])
+            gap = gap < -tolerance
+            gap &= ~pinned[at]
+            return np.flatnonzero(gap) + first
+        gap = u[nodes]  # then the signed gap, bound − side·u, in its place
+        gap = (np.subtract if side > 0 else np.add)(self.wall_gap(side), gap, out=gap)
+        return nodes[(gap < -tolerance) & ~pinned[nodes]]
 
-    def add_hull_walls(self, side: int, u: np.ndarray, pinned: np.ndarray, passed: np.ndarray,
-                       tolerance: float) -> np.ndarray:
-        """The walls on ``side`` to add: the vertices of each passed stretch's greatest convex
-        minorant of its signed gaps (module docstring); ``passed``: the passed nodes, sorted."""
+    def wall_gap(self, side: int) -> np.ndarray:
+        """The gap of each wall on ``side``, in the order of :attr:`wall_nodes` (made on the
+        first step that reads it)."""
+        gaps = self._wall_gaps.get(side)
+        if gaps is None:
+            gaps = self._wall_gaps[side] = self.bound[side][self.wall_nodes[side]]
+        return gaps
+
+    def add_hull_walls(self, side: int, u: np.ndarray, held_nodes: np.ndarray,
+                       passed: np.ndarray, tolerance: float) -> dict[int, list[np.ndarray]]:
+        """The walls to add, per side: on ``side``, the vertices of each passed stretch's
+        greatest convex minorant of its signed gaps (module docstring); ``held_nodes``: the
+        held nodes and supports, ``passed``: the passed nodes, both sorted. Within each
+        stretch the new walls are then settled at once (:meth:`settle`), which may add walls
+        on the other side too."""
         bound, walled = self.bound[side], self.wall_nodes[side]
-
-        def signed_gap(nodes: np.ndarray) -> np.ndarray:  # < 0 where passed
-            return bound[nodes] - side * u[nodes]
-
-        run = count_up_to(pinned | self.bar_start)  # a stretch per held node or bar start
-        adding = np.zeros(self.n, dtype=bool)
-        stretch_of = run[passed]
-        stretches = stretch_of[run_starts(stretch_of)]
-        begin = np.searchsorted(run, stretches, side="left")
-        finish = np.searchsorted(run, stretches, side="right")
-        for a, b in zip(begin.tolist(), finish.tolist()):
+        adding: dict[int, list[np.ndarray]] = {1: [], -1: []}
+        # each passed node's stretch, from the held nodes either side of it in its bar (by
+        # bisection: no pass over the chain), else its bar's ends; every bar has a support
+        after = np.searchsorted(held_nodes, passed)  # the first held node after each
+        first = run_starts(after)  # the first passed node of each stretch
+        if self.bars > 1:
+            first |= run_starts(self.bar[passed])
+        passed, after = passed[first], after[first]
+        start, stop = self.bar_first[passed], self.bar_last[passed] + 1
+        before = held_nodes[np.maximum(after - 1, 0)]
+        anchored_left = (after > 0) & (before >= start)
+        after = held_nodes[np.minimum(after, held_nodes.size - 1)]
+        anchored_right = (after > passed) & (after < stop)
+        for a, b, held_left, held_right in zip(np.where(anchored_left, before, start).tolist(),
+                                               np.where(anchored_right, after, stop).tolist(),
+                                               anchored_left.tolist(), anchored_right.tolist()):
             # nodes a..b-1 share the stretch; a is held (the left anchor) or a bar's start
-            anchored_left = bool(pinned[a])
-            inner = a + 1 if anchored_left else a
-            anchored_right = b < self.n and not self.bar_start[b] and bool(pinned[b])
+            left = a if held_left else None
+            right = b if held_right else None
+            inner = a + 1 if left is not None else a
             nodes = walled[np.searchsorted(walled, inner): np.searchsorted(walled, b)]
-            if nodes.size == 1:  # one wall in the stretch: the minorant's only vertex
-                adding[nodes[signed_gap(nodes) < -tolerance]] = True
-                continue
-            x, y = self.phi[nodes], signed_gap(nodes)
-            if anchored_left:
-                x, y = np.concatenate(([self.phi[a]], x)), np.concatenate(([0.0], y))
-            if anchored_right:
-                x, y = np.append(x, self.phi[b]), np.append(y, 0.0)
-            clip = 0 if anchored_left and anchored_right else (-1 if anchored_left else 1)
-            vertices = minorant_vertices(x, y, clip)
-            vertices -= int(anchored_left)
-            vertices = vertices[(vertices >= 0) & (vertices < nodes.size)]
-            chosen = nodes[vertices]
-            adding[chosen[signed_gap(chosen) < -tolerance]] = True
+            chosen = self.stretch_walls(side, nodes, bound[nodes] - side * u[nodes], left,
+                                        right, tolerance)
+            adding[side].append(chosen)
+            ends = Stretch(inner, b, left, right,
+                           None if left is None else self.u_free[left] - u[left],
+                           None if right is None else self.u_free[right] - u[right])
+            self.settle(side, chosen, ends, tolerance, adding)
         return adding
+
+    def stretch_walls(self, side: int, nodes: np.ndarray, gaps: np.ndarray, left: int | None,
+                      right: int | None, tolerance: float, phi: np.ndarray | None = None
+                      ) -> np.ndarray:
+        """The walls on ``side`` to add in one stretch: the vertices of the greatest convex
+        minorant of the signed ``gaps`` (< 0 where passed) at its walled ``nodes`` (``phi``:
+        φ there, if known), the held ends ``left`` and ``right`` (None: a free end) at 0,
+        that are passed."""
+        if nodes.size == 1:  # one wall in the stretch: the minorant's only vertex
+            return nodes[gaps < -tolerance]
+        first = int(left is not None)  # the points: the held ends, each array made once
+        size = nodes.size + first + int(right is not None)
+        x, y = np.empty(size), np.empty(size)
+        inner = slice(first, first + nodes.size)
+        if phi is None:
+            np.take(self.phi, nodes, out=x[inner], mode="clip")
+        else:
+            x[inner] = phi
+        y[inner] = gaps
+        if left is not None:
+            x[0], y[0] = self.phi[left], 0.0
+        if right is not None:
+            x[-1], y[-1] = self.phi[right], 0.0
+        clip = 0 if left is not None and right is not None else (-1 if left is not None else 1)
+        vertices = minorant_vertices(x, y, clip)
+        vertices -= int(left is not None)
+        vertices = vertices[(vertices >= 0) & (vertices < nodes.size)]
+        return nodes[vertices[gaps[vertices] < -tolerance]]
+
+    def settle(self, side: int, chosen: np.ndarray, ends: Stretch, tolerance: float,
+               adding: dict[int, list[np.ndarray]]) -> None:
+        """Add to ``adding`` the walls that the stretch ``ends`` needs once the walls
+        ``chosen`` on ``side`` hold: the stretch's displacements between its held nodes follow
+        from statics alone (linear in φ, module docstring), so where they now pass the other
+        side's walls, that side's hull walls are added in each sub-stretch between held
+        nodes, and so on, side after side, until nothing in the stretch is passed. A step
+        then settles a stretch that the steps would otherwise settle one side at a time."""
+        work = [(side, chosen, ends)]
+        for _ in range(MAX_SETTLING):
+            if not work:
+                return
+            side, chosen, ends = work.pop()
+            other = -side
+            if not chosen.size or other not in self.sides:
+                continue
+            walled = self.wall_nodes[other]
+            nodes = walled[np.searchsorted(walled, ends.first): np.searchsorted(walled, ends.stop)]
+            # each node's sub-stretch k, between chosen k − 1 and k: the chosen before it
+            chosen_here = np.zeros(ends.stop - ends.first, dtype=bool)
+            chosen_here[chosen - ends.first] = True
+            count = count_up_to(chosen_here)
+            if nodes.size == chosen_here.size:  # a wall at every node: no gather by node
+                free = ~chosen_here
+                nodes, part = nodes[free], count[free]
+            else:
+                local = nodes - ends.first
+                free = ~chosen_here[local]
+                nodes, part = nodes[free], count[local[free]]
+            w_chosen = self.u_free[chosen] - side * self.bound[side][chosen]
+            anchors, w = ends.anchors(chosen, w_chosen)
+            phi = self.phi[nodes]
+            gaps = np.interp(phi, self.phi[anchors], w)  # w, then u, then the signed gap
+            np.subtract(self.u_free[nodes], gaps, out=gaps)
+            (np.subtract if other > 0 else np.add)(self.bound[other][nodes], gaps, out=gaps)
+            passed = gaps < -tolerance
+            if not passed.any():
+                continue
+            parts = part[passed]
+            parts = parts[run_starts(parts)]
+            # part rises along the stretch: each sub-stretch's nodes are one slice
+            begin = np.searchsorted(part, parts, side="left").tolist()
+            finish = np.searchsorted(part, parts, side="right").tolist()
+            for k, a, b in zip(parts.tolist(), begin, finish):
+                sub = ends.between(chosen, k, w_chosen)
+                found = self.stretch_walls(other, nodes[a:b], gaps[a:b], sub.left, sub.right,
+                                           tolerance, phi[a:b])
+                adding[other].append(found)
+                work.append((other, found, sub))
+
+
+class Stretch:
+    """Nodes ``first`` .. ``stop`` − 1 between the held nodes ``left`` and ``right`` (None: a
+    free end there), and w = u_free − u at those two (None at a free end)."""
+
+    def __init__(self, first: int, stop: int, left: int | None, right: int | None,
+                 w_left: float | None, w_right: float | None) -> None:
+        self.first, self.stop, self.left, self.right = first, stop, left, right
+        self.w_left, self.w_right = w_left, w_right
+
+    def anchors(self, inner: np.ndarray, w_inner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The held nodes of the stretch with ``inner`` held too, in order, and w at each."""
+        nodes, w = [inner], [w_inner]
+        if self.left is not None:
+            nodes.insert(0, [self.left])
+            w.insert(0, [self.w_left])
+        if self.right is not None:
+            nodes.append([self.right])
+            w.append([self.w_right])
+        return np.concatenate(nodes).astype(np.intp), np.concatenate(w)
+
+    def between(self, inner: np.ndarray, k: int, w_inner: np.ndarray) -> Stretch:
+        """The sub-stretch between held nodes ``inner`` k − 1 and k (the ends beyond them)."""
+        left = self.left if k == 0 else int(inner[k - 1])
+        right = self.right if k == inner.size else int(inner[k])
+        return Stretch(self.first if k == 0 else left + 1, self.stop if k == inner.size else right,
+                       left, right,
+                       self.w_left if k == 0 else float(w_inner[k - 1]),
+                       self.w_right if k == inner.size else float(w_inner[k]))
+
+
+FEW_HELD = 32  # held nodes on one bar up to which u is worked out segment by segment
+MAX_SETTLING = 4096  # sub-stretches settled at most per stretch and step (the steps go on)
 
 
 def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
@@ -185,12 +379,16 @@ def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
     (a free end on the left); 0: both ends held (the first and last points, at 0)."""
     if x.size < 2:
         return np.zeros(x.size, dtype=np.intp)
-    slope = minorant_slopes(x, y)
+    hull = _hull_corners(x, y)
+    if hull is None:  # rare: a very lopsided hull; the slope of every step from scipy
+        corners, slope = np.arange(x.size), _isotonic_slopes(x, y)
+    else:  # the slope of each segment between the hull's corners
+        corners, slope = hull
     if clip < 0:
         slope = np.minimum(slope, 0.0)
     elif clip > 0:
         slope = np.maximum(slope, 0.0)
-    vertices = np.flatnonzero(slope[1:] != slope[:-1]) + 1
+    vertices = corners[1:-1][slope[1:] != slope[:-1]]
     if clip > 0 and slope[0] > 0.0:  # the minorant rises from the first point: its lowest
         vertices = np.concatenate(([0], vertices))
     if clip < 0 and slope[-1] < 0.0:  # the minorant falls to the last point: its lowest
@@ -208,32 +406,55 @@ def minorant_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """The slope of the greatest convex minorant of the points (x, y) (x increasing) over
     each step of x: the weighted isotonic regression of the steps' slopes (weights the steps
     of x) that scipy.optimize.isotonic_regression gives, found as the lower hull instead
-    (importing scipy.optimize takes 0.2-0.3 s, on the first solve of every process that
-    meets a passed wall). A point where the slope does not rise is no vertex of the hull, and
-    dropping all such points at once leaves the hull as it is: one such pass leaves convex
-    runs between a few dents (the channel, the flat patch), joined by their common tangents
-    (:func:`_join_convex_runs`); many dents go to a quickhull (:func:`_lower_hull`)."""
-    corners = np.arange(x.size)
+    (:func:`_hull_corners`; importing scipy.optimize takes 0.2-0.3 s, on the first solve of
+    every process that meets a passed wall)."""
+    hull = _hull_corners(x, y)
+    if hull is None:
+        return _isotonic_slopes(x, y)
+    corners, slope = hull
+    return np.repeat(slope, np.diff(corners))
+
+
+def _hull_corners(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The corners of the lower hull of the points (x, y) (indices, increasing, the first and
+    the last among them) and the slope between each two, or None for a lopsided hull. A point
+    where the slope does not rise is no corner, and dropping all such points at once leaves
+    the hull as it is: one such pass leaves convex runs between a few dents (the channel,
+    the flat patch), joined by their common tangents (:func:`_join_convex_runs`); many dents
+    go to a quickhull (:func:`_lower_hull`)."""
+    corners = None  # all the points (read in place, not gathered)
     for _ in range(PRUNING_PASSES):
-        slope = np.diff(y[corners]) / np.diff(x[corners])
+        if corners is None:
+            slope = np.diff(y) / np.diff(x)
+        else:
+            slope = np.diff(y[corners]) / np.diff(x[corners])
         rises = slope[1:] > slope[:-1]
         if rises.all():
-            return np.repeat(slope, np.diff(corners))
-        corners = corners[np.concatenate(([True], rises, [True]))]
+            return np.arange(x.size) if corners is None else corners, slope
+        keep = np.concatenate(([True], rises, [True]))
+        corners = np.flatnonzero(keep) if corners is None else corners[keep]
+    if corners is None:
+        corners = np.arange(x.size)
     # what is left is convex but at a few points (each pass above dropped one point there):
     # join its convex runs by their common tangents; many such points, a quickhull
     slope = np.diff(y[corners]) / np.diff(x[corners])
     dents = np.flatnonzero(slope[1:] <= slope[:-1]) + 1  # no corner there
     if dents.size == 0:  # the last pass left only corners
-        return np.repeat(slope, np.diff(corners))
+        return corners, slope
     joined = _join_convex_runs(x, y, corners, dents) if dents.size <= MAX_JOINS else None
     corners = _lower_hull(x, y, corners) if joined is None else joined
-    if corners is None:  # rare: a very lopsided hull
-        from scipy.optimize import isotonic_regression
+    if corners is None:
+        return None
+    return corners, np.diff(y[corners]) / np.diff(x[corners])
 
-        dx = np.diff(x)
-        return isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
-    return np.repeat(np.diff(y[corners]) / np.diff(x[corners]), np.diff(corners))
+
+def _isotonic_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The minorant's slope over every step of x by scipy (the weighted isotonic regression
+    of the steps' slopes)."""
+    from scipy.optimize import isotonic_regression
+
+    dx = np.diff(x)
+    return isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
 
 
 def _join_convex_runs(x: np.ndarray, y: np.ndarray, corners: np.ndarray,
@@ -250,11 +471,12 @@ def _join_convex_runs(x: np.ndarray, y: np.ndarray, corners: np.ndarray,
         if run.size == 0:  # two dents side by side
             continue
         i, j = hull.size - 1, 0
+        x_run, y_run, x_hull, y_hull = x[run], y[run], x[hull], y[hull]  # read once a run
         for _ in range(HULL_LEVELS):
             with np.errstate(divide="ignore", invalid="ignore"):
-                to_run = (y[run] - y[hull[i]]) / (x[run] - x[hull[i]])
+                to_run = (y_run - y_hull[i]) / (x_run - x_hull[i])
                 j_new = run.size - 1 - int(np.argmin(to_run[::-1]))  # the last of a tie
-                from_hull = (y[run[j_new]] - y[hull]) / (x[run[j_new]] - x[hull])
+                from_hull = (y_run[j_new] - y_hull) / (x_run[j_new] - x_hull)
                 i_new = int(np.argmax(from_hull))  # the first of a tie
             if (i_new, j_new) == (i, j):
                 break
@@ -337,7 +559,10 @@ def solve_hull(model: Model, *, max_iterations: int | None = None, load_factor: 
             held[side][pulling] = False
         for side, stretch in passed.items():
             if stretch.size:
-                held[side] |= chain.add_hull_walls(side, u, pinned, stretch, disp_tol)
+                for held_side, found in chain.add_hull_walls(side, u, nodes, stretch,
+                                                             disp_tol).items():
+                    for new in found:
+                        held[held_side][new] = True
         held[-1] &= ~held[1]
     active = np.zeros(chain.n_rows, dtype=bool)
     for side in (1, -1):
@@ -351,5 +576,12 @@ def _solution(chain: WallsOnChain, u: np.ndarray, nodes: np.ndarray, force: np.n
     for side in (1, -1):
         mine = held[side][nodes]
         contact_force[chain.owner[side][nodes[mine]]] = force[mine]
-    return Solution(u[chain.model.free], contact_force, solver="lagrange", iterations=steps,
+    free = chain.model.free
+    if free.size and free[-1] - free[0] + 1 == free.size:  # the free nodes are one range
+        u_free = u[free[0]: free[-1] + 1]
+        if u is chain.u_free:  # no wall held: the Solution's own copy
+            u_free = u_free.copy()
+    else:
+        u_free = u[free]
+    return Solution(u_free, contact_force, solver="lagrange", iterations=steps,
                     info={"active_set": "hull"})
