@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 
 import contactqp
 from contactqp import Bar, DistributedLoad, Load, Scene, SceneError, Support, Wall
-from contactqp.methods import hull
-from contactqp.methods.hull import minorant_slopes, minorant_vertices
+from contactqp.methods import minorant
+from contactqp.methods.minorant import minorant_slopes, minorant_vertices
 from contactqp.random_scenes import random_scene
 from contactqp.reference import reference
 
@@ -91,8 +91,8 @@ def test_minorant_slopes_hand_a_lopsided_hull_to_scipy(monkeypatch):
     x = np.linspace(0.0, 1.0, 200)
     y = np.exp(8.0 * x)
     full = minorant_slopes(x, y)
-    monkeypatch.setattr(hull, "HULL_LEVELS", 2)
-    monkeypatch.setattr(hull, "PRUNING_PASSES", 0)
+    monkeypatch.setattr(minorant, "HULL_LEVELS", 2)
+    monkeypatch.setattr(minorant, "PRUNING_PASSES", 0)
     np.testing.assert_allclose(minorant_slopes(x, y), full, rtol=1e-12)
 
 

@@ -13,8 +13,8 @@ wall's force is the kink of w there. The same equations as the textbook loop
   a node passes a wall, the walls added are the vertices of the greatest convex minorant of
   that stretch's signed gaps against φ: the held set that makes the stretch feasible with
   forces of the right sign at once, if its ends stay where they are. The minorant is an
-  isotonic regression of the slopes (scipy.optimize.isotonic_regression, O(n)); a free end
-  clips its slopes (no force beyond the last contact);
+  isotonic regression of the slopes, found as a lower hull (:mod:`contactqp.methods.minorant`);
+  a free end clips its slopes (no force beyond the last contact);
 - the stretch is then settled within the same step: between its held nodes (old and new) u
   follows from statics alone, so where it now passes the other side's walls, that side's
   hull walls are added in each such sub-stretch, and so on until nothing in the stretch is
@@ -36,6 +36,7 @@ from dataclasses import replace
 import numpy as np
 
 from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
+from contactqp.methods.minorant import minorant_vertices
 from contactqp.model import Condensed, Model, count_up_to, largest, run_ends, run_starts, spread
 from contactqp.result import Solution
 
@@ -369,153 +370,6 @@ class Stretch:
 
 FEW_HELD = 32  # held nodes on one bar up to which u is worked out segment by segment
 MAX_SETTLING = 4096  # sub-stretches settled at most per stretch and step (the steps go on)
-
-
-def minorant_vertices(x: np.ndarray, y: np.ndarray, clip: int) -> np.ndarray:
-    """Indices of the vertices of the greatest convex minorant of the points (x, y), x
-    increasing: the slopes' isotonic regression, weighted by the steps of x, changes value
-    there. ``clip`` −1: slopes <= 0 (a free end on the right: nothing pulls beyond the last
-    contact, so the minorant ends flat, its last vertex the lowest point); +1: slopes >= 0
-    (a free end on the left); 0: both ends held (the first and last points, at 0)."""
-    if x.size < 2:
-        return np.zeros(x.size, dtype=np.intp)
-    hull = _hull_corners(x, y)
-    if hull is None:  # rare: a very lopsided hull; the slope of every step from scipy
-        corners, slope = np.arange(x.size), _isotonic_slopes(x, y)
-    else:  # the slope of each segment between the hull's corners
-        corners, slope = hull
-    if clip < 0:
-        slope = np.minimum(slope, 0.0)
-    elif clip > 0:
-        slope = np.maximum(slope, 0.0)
-    vertices = corners[1:-1][slope[1:] != slope[:-1]]
-    if clip > 0 and slope[0] > 0.0:  # the minorant rises from the first point: its lowest
-        vertices = np.concatenate(([0], vertices))
-    if clip < 0 and slope[-1] < 0.0:  # the minorant falls to the last point: its lowest
-        vertices = np.append(vertices, x.size - 1)
-    return vertices
-
-
-HULL_LEVELS = 64  # levels of minorant_slopes before it hands the points to scipy
-PRUNING_PASSES = 1  # passes that drop the points no corner can be, before the tangents
-# (one: on the channel and the patch later passes drop one point per dent and pass)
-MAX_JOINS = 32  # at most this many dents left: convex runs joined by tangents, else quickhull
-
-
-def minorant_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The slope of the greatest convex minorant of the points (x, y) (x increasing) over
-    each step of x: the weighted isotonic regression of the steps' slopes (weights the steps
-    of x) that scipy.optimize.isotonic_regression gives, found as the lower hull instead
-    (:func:`_hull_corners`; importing scipy.optimize takes 0.2-0.3 s, on the first solve of
-    every process that meets a passed wall)."""
-    hull = _hull_corners(x, y)
-    if hull is None:
-        return _isotonic_slopes(x, y)
-    corners, slope = hull
-    return np.repeat(slope, np.diff(corners))
-
-
-def _hull_corners(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """The corners of the lower hull of the points (x, y) (indices, increasing, the first and
-    the last among them) and the slope between each two, or None for a lopsided hull. A point
-    where the slope does not rise is no corner, and dropping all such points at once leaves
-    the hull as it is: one such pass leaves convex runs between a few dents (the channel,
-    the flat patch), joined by their common tangents (:func:`_join_convex_runs`); many dents
-    go to a quickhull (:func:`_lower_hull`)."""
-    corners = None  # all the points (read in place, not gathered)
-    for _ in range(PRUNING_PASSES):
-        if corners is None:
-            slope = np.diff(y) / np.diff(x)
-        else:
-            slope = np.diff(y[corners]) / np.diff(x[corners])
-        rises = slope[1:] > slope[:-1]
-        if rises.all():
-            return np.arange(x.size) if corners is None else corners, slope
-        keep = np.concatenate(([True], rises, [True]))
-        corners = np.flatnonzero(keep) if corners is None else corners[keep]
-    if corners is None:
-        corners = np.arange(x.size)
-    # what is left is convex but at a few points (each pass above dropped one point there):
-    # join its convex runs by their common tangents; many such points, a quickhull
-    slope = np.diff(y[corners]) / np.diff(x[corners])
-    dents = np.flatnonzero(slope[1:] <= slope[:-1]) + 1  # no corner there
-    if dents.size == 0:  # the last pass left only corners
-        return corners, slope
-    joined = _join_convex_runs(x, y, corners, dents) if dents.size <= MAX_JOINS else None
-    corners = _lower_hull(x, y, corners) if joined is None else joined
-    if corners is None:
-        return None
-    return corners, np.diff(y[corners]) / np.diff(x[corners])
-
-
-def _isotonic_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The minorant's slope over every step of x by scipy (the weighted isotonic regression
-    of the steps' slopes)."""
-    from scipy.optimize import isotonic_regression
-
-    dx = np.diff(x)
-    return isotonic_regression(np.diff(y) / dx, weights=dx, increasing=True).x
-
-
-def _join_convex_runs(x: np.ndarray, y: np.ndarray, corners: np.ndarray,
-                      dents: np.ndarray) -> np.ndarray | None:
-    """The lower hull of the points ``corners``, which are convex runs apart from the points
-    at the positions ``dents`` (no vertex can be there: the slope does not rise): the runs
-    joined left to right, each by the common tangent of the hull so far and the next run
-    (the tangent's ends found in turn until neither moves; collinear points between them
-    dropped). None if a tangent does not settle (the caller uses the quickhull)."""
-    bounds = np.concatenate(([0], dents, [corners.size - 1]))
-    hull = corners[: bounds[1]]
-    for a, b in zip(bounds[1:-1].tolist(), bounds[2:].tolist()):
-        run = corners[a + 1: b + 1] if b == corners.size - 1 else corners[a + 1: b]
-        if run.size == 0:  # two dents side by side
-            continue
-        i, j = hull.size - 1, 0
-        x_run, y_run, x_hull, y_hull = x[run], y[run], x[hull], y[hull]  # read once a run
-        for _ in range(HULL_LEVELS):
-            with np.errstate(divide="ignore", invalid="ignore"):
-                to_run = (y_run - y_hull[i]) / (x_run - x_hull[i])
-                j_new = run.size - 1 - int(np.argmin(to_run[::-1]))  # the last of a tie
-                from_hull = (y_run[j_new] - y_hull) / (x_run[j_new] - x_hull)
-                i_new = int(np.argmax(from_hull))  # the first of a tie
-            if (i_new, j_new) == (i, j):
-                break
-            i, j = i_new, j_new
-        else:
-            return None
-        hull = np.concatenate((hull[: i + 1], run[j:]))
-    return hull
-
-
-def _lower_hull(x: np.ndarray, y: np.ndarray, candidates: np.ndarray) -> np.ndarray | None:
-    """The vertices of the lower hull of the points ``candidates`` (indices, increasing, the
-    first and the last among them), by quickhull with every segment split at once: each level
-    keeps the points below their segment's chord and makes the lowest of them a vertex. A
-    smooth stretch takes about log2(points) levels; None past HULL_LEVELS."""
-    vertex = np.zeros(x.size, dtype=bool)
-    vertex[candidates[[0, -1]]] = True
-    points = candidates[1:-1]
-    left = np.full(points.size, candidates[0])
-    right = np.full(points.size, candidates[-1])
-    for _ in range(HULL_LEVELS):
-        # how far below the chord of its segment each point lies (> 0: below)
-        depth = ((y[left] - y[points]) * (x[right] - x[left])
-                 + (y[right] - y[left]) * (x[points] - x[left]))
-        below = depth > 0.0
-        points, left, right, depth = points[below], left[below], right[below], depth[below]
-        if points.size == 0:
-            return np.flatnonzero(vertex)
-        first = np.flatnonzero(run_starts(left))  # the segments, in order along x
-        deepest = np.maximum.reduceat(depth, first)
-        sizes = np.diff(np.append(first, points.size))
-        lowest = np.flatnonzero(depth == np.repeat(deepest, sizes))  # the first of a tie
-        split = points[lowest[run_starts(left[lowest])]]
-        vertex[split] = True
-        at = np.repeat(split, sizes)
-        right, left = np.where(points < at, at, right), np.where(points > at, at, left)
-        keep = points != at
-        points, left, right = points[keep], left[keep], right[keep]
-    return None
 
 
 def solve_on_chain(model: Model | Condensed, contact: str, max_iterations: int | None = None
