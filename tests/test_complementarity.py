@@ -45,16 +45,54 @@ def test_the_default_scene_is_its_closed_form(method, options, contact):
 def test_lemke_and_newton_are_exact_where_lagrange_is(seed):
     """Random single bars without the extra stiffness contrast (where Lagrange multipliers are
     exact to round-off, test_guarantee.py): Lemke's pivots and Newton on min and on
-    Fischer–Burmeister reach the exact reference to round-off, verified."""
+    Fischer–Burmeister reach the exact reference (Lemke to round-off, Newton to its stopping
+    residual, :data:`EXACT_TO`) or the round-off of the LCP they solve where that is larger,
+    and are verified where that round-off is within the check's tolerance. The LCP's W = C K⁻¹ Cᵀ
+    can be far worse conditioned than K: seed 13219 squeezes a stiff element (1.6e10 N/m)
+    between a press fit and a wall behind a soft one (2.8e4 N/m), the walls push with
+    5.5e10 N against F = 1.0e6 N, cond(W_AA) = 2e6, and both methods' forces are 6 N off
+    (1.1e-10 of themselves, 6e-6 of F): rightly flagged, their error within the check's
+    bound."""
     scene = random_scene(np.random.default_rng(seed), max_bars=1, contrast=False)
     exact = reference(scene)
+    largest = np.abs(exact.contact_force).max(initial=0.0)
+    roundoff = (LCP_ROUNDOFF * np.finfo(float).eps * largest
+                * lcp_condition(scene, exact.contact_force > 0.0))
     for method, options in EXACT:
         result = contactqp.solve(scene, method, **options)
-        assert result.verified, (seed, method, options, result.message)
-        # round-off of the largest force (press fits can push far beyond F)
-        largest = max(result.force_scale, np.abs(exact.contact_force).max(initial=0.0))
-        assert np.abs(result.contact_force - exact.contact_force).max(initial=0.0) <= (
-            1e-9 * largest), (seed, method, options)
+        error = np.abs(result.contact_force - exact.contact_force).max(initial=0.0)
+        # Lemke to round-off, Newton to its stopping residual, of the largest force (press
+        # fits can push far beyond F), or the LCP's round-off where W_AA is ill-conditioned
+        allowed = EXACT_TO[method] * max(result.force_scale, largest)
+        assert error <= max(allowed, roundoff), (seed, method, options, error)
+        # the check reads a force's round-off again as the move it makes through a soft
+        # element, times the stiffness a wall beside a stiff one sees (seed 3988435278: Lemke
+        # 2.9e-4 N off, a clamped node 2e-9 m into its zero-gap wall beside 1.1e11 N/m,
+        # 1.4e-5 of F: flagged, its error within the check's bound)
+        stiffness = scene.layout.element_stiffness
+        if roundoff * stiffness.max() / stiffness.min() <= 1e-7 * result.force_scale:
+            assert result.verified, (seed, method, options, result.message)
+        else:  # verified or not, the check's bound holds the error
+            assert error <= result.force_error_bound, (seed, method, options)
+
+
+# how close each gets, relative to the largest force: Lemke's pivots to round-off; Newton
+# stops at a natural-map residual of 1e-13 (seed 92180405: Newton on min 7.6e-7 N off on
+# F = 449 N, 1.7e-9 of F, verified)
+EXACT_TO = {"lemke": 1e-9, "semismooth_newton": 1e-8}
+LCP_ROUNDOFF = 1024  # units of round-off of the largest force per unit of cond(W_AA): the
+# methods step through the whole LCP (Newton by least squares), not W_AA alone (seed
+# 3771110771: Newton on min 2.7e-3 N off, 2.8e3 units of cond(W_AA) = 2.7e5, verified)
+
+
+def lcp_condition(scene: contactqp.Scene, active: np.ndarray) -> float:
+    """cond(W_AA) of the contact LCP, W = C K⁻¹ Cᵀ over the ``active`` rows (the exact
+    answer's pushing ones, which set the forces), from dense matrices (1 with none)."""
+    model = build_model(scene)
+    if not active.any():
+        return 1.0
+    C = model.C.toarray()[active]
+    return float(np.linalg.cond(C @ np.linalg.solve(model.K.toarray(), C.T)))
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
