@@ -198,6 +198,11 @@ class Layout:
             return _read_only(self.link_compliance * np.append(self.running_load[:-1], 0.0))
 
     @cached_property
+    def load_size(self) -> float:
+        """‖nodal loads‖∞ (N), once per scene: the hull's force tolerance starts from it."""
+        return largest(self.nodal_loads)
+
+    @cached_property
     def load_scale(self) -> float:
         """:func:`load_force_scale`, once per scene (from :attr:`load_terms`)."""
         return largest(self.load_terms)

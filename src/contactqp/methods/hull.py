@@ -79,9 +79,10 @@ class WallsOnChain:
         # the sides that have walls: a side without one is never passed
         self.sides = tuple(side for side in (1, -1) if self.wall_nodes[side].size)
         self.bar_first, self.bar_last = layout.bar_ends  # each node's bar's first and last
-        self.force_tolerance_base = largest(P)
-        stiffness = float(model.band[0].max()) if model.band.size else 1.0
-        self.displacement_floor = max(largest(model.g), self.force_tolerance_base / stiffness)
+        # ‖P‖∞ and K's stiffest entry once per scene (each a pass over the chain)
+        self.force_tolerance_base = layout.load_size if load_factor == 1.0 else largest(P)
+        self.displacement_floor = max(largest(model.g),
+                                      self.force_tolerance_base / model.stiffest)
 
     def statics(self, held: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray,
                                                            np.ndarray, np.ndarray]:

@@ -58,7 +58,7 @@ class Model:
         """This model for a scene that differs only in its load values and gaps (``layout``
         from :meth:`Layout.with_values`): the numbering, K and C shared, P and g anew."""
         model = Model(layout, self.free, self.band, free_loads(layout), self.C, layout.rows.gap)
-        for name in ("K", "determinate", "compliance_to_support"):  # K alone, not P or g
+        for name in ("K", "determinate", "compliance_to_support", "stiffest"):  # K, not P or g
             if name in self.__dict__:
                 model.__dict__[name] = self.__dict__[name]
         return model
@@ -90,6 +90,11 @@ class Model:
             return linalg.solve_spd_band(self.band, rhs)
         except np.linalg.LinAlgError as error:
             raise SolverError(f"K is not positive definite ({error})") from None
+
+    @cached_property
+    def stiffest(self) -> float:
+        """K's largest diagonal entry (N/m; 1 without unknowns): the hull's displacement floor."""
+        return float(self.band[0].max()) if self.band.size else 1.0
 
     @cached_property
     def floating(self) -> tuple[int, ...]:
