@@ -32,12 +32,19 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from contactqp.check import TOLERANCES, natural_map, row_compliance_roots
+from contactqp.check import TOLERANCES, check, natural_map, row_compliance_roots
 from contactqp.errors import ContactqpError, SceneError, SolverError
 from contactqp.methods import cases as many
-from contactqp.model import Model, displacement_scale_rule, force_scale_rule
+from contactqp.model import (
+    Model,
+    displacement_scale_rule,
+    element_forces,
+    force_scale_rule,
+    link_forces,
+    penetration,
+)
 from contactqp.progress import Progress
-from contactqp.result import Result, Solution, make_result
+from contactqp.result import Result, Solution, make_result, support_reactions
 from contactqp.scene import Scene
 from contactqp.scene.scene import side_by_side
 
@@ -176,8 +183,7 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
     solution = Solution(solved.u_free.ravel(), tiled_rows(solved.contact_force, walls),
                         prepared.method, int(solved.iterations.max(initial=0)),
                         "solved with the batch")
-    together = make_result(model, solution, method=prepared.method, contact=prepared.contact,
-                           options=prepared.result_options, timings={})
+    together = _checked_together(model, solution, prepared.contact)
     F, U = case_scales(model, cases, solved.free_displacement, gap_cases)
     lam = solved.contact_force
     residuals, checked = _case_residuals(prepared, together, solved, gap_cases, F, U)
@@ -200,7 +206,36 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
     return batch
 
 
-def _case_residuals(prepared: Prepared, together: Result, solved: many.CasesSolution,
+@dataclass(frozen=True)
+class _Together:
+    """What a batch reads from the check of all its cases as one tiled scene (the fields a
+    Result would carry of it; no stresses, no natural map: those are read case by case)."""
+
+    u: np.ndarray
+    reactions: np.ndarray
+    penetration: np.ndarray
+    residuals: dict[str, float | None]
+    force_error_bound: float
+    displacement_error_bound: float
+    force_scale: float
+    displacement_scale: float
+
+
+def _checked_together(model: Model, solution: Solution, contact: str) -> _Together:
+    """The tiled answer checked as one scene (contactqp.check), as make_result would check
+    it, without the quantities a batch does not read."""
+    layout = model.layout
+    u = model.full_displacements(np.asarray(solution.u_free, dtype=float))
+    lam = np.asarray(solution.contact_force, dtype=float)
+    forces = element_forces(layout, u)
+    reactions = support_reactions(layout, link_forces(layout, forces), lam)
+    found = check(model, u, lam, reactions, contact, element_force=forces, natural=False)
+    return _Together(u, reactions, penetration(layout, u), found.residuals,
+                     found.force_error_bound, found.displacement_error_bound,
+                     found.force_scale, found.displacement_scale)
+
+
+def _case_residuals(prepared: Prepared, together: _Together, solved: many.CasesSolution,
                     gap_cases: np.ndarray, F: np.ndarray, U: np.ndarray
                     ) -> tuple[dict[str, np.ndarray], list[str]]:
     """Each case's residuals, relative to its own scales F and U (the batch's residuals are

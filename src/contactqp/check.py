@@ -134,7 +134,7 @@ def external_forces(layout: Layout, contact_force: np.ndarray,
 
 def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.ndarray,
           contact: str, tolerances: Tolerances = TOLERANCES,
-          element_force: np.ndarray | None = None) -> Check:
+          element_force: np.ndarray | None = None, natural: bool = True) -> Check:
     """Check displacements (every node) and forces against a model (or a scene, whose model is
     built), independently of how they were found. ``contact`` is "inequality" or "equality".
     ``element_force``: the element forces k_e·(u_(e+1) − u_e) when the caller has them.
@@ -155,6 +155,9 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
         The residuals' tolerances (default :data:`contactqp.TOLERANCES`).
     element_force : array_like, optional
         The element forces, when the caller has them.
+    natural : bool
+        Whether to work out the natural-map residual (not part of ``verified``); False
+        leaves it NaN (a batch works it out case by case).
 
     Returns
     -------
@@ -198,8 +201,10 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
         if value is not None and not value <= getattr(tolerances, name)
     ]
     # the LCP needs K⁻¹, which a scene with a bar held only by contact does not have
-    residuals["natural_map"] = None if contact == "equality" or model.floating else float(natural_map(
-        lam, -bounds.penetration, free_gaps(model), row_compliance_roots(layout)))
+    residuals["natural_map"] = (
+        None if contact == "equality" or model.floating
+        else float(natural_map(lam, -bounds.penetration, free_gaps(model),
+                               row_compliance_roots(layout))) if natural else math.nan)
     pulling = float(np.max(-lam, initial=0.0)) / F
     physical = pulling <= tolerances.sign
     notes = list(failures)
