@@ -285,12 +285,10 @@ def gap_moves(layout: Layout, held: np.ndarray, nodes: np.ndarray, delta: np.nda
     moving = node_set(layout.n_nodes, held, nodes[delta > 0.0])
     if moving.size == 0:
         return 0.0, 0.0, (moving, np.zeros(0))
+    listed, at, to_left, to_right = kept(layout, "moving", moving,
+                                         lambda: _moving_links(layout, moving, nodes))
     by_node = np.zeros(moving.size)
-    index = np.full(layout.n_nodes, -1, dtype=np.intp)  # each moving node's place in moving
-    index[moving] = np.arange(moving.size)
-    place = index[nodes]
-    listed = place >= 0
-    _largest_at(by_node, place[listed], delta[listed])
+    _largest_at(by_node, at, delta[listed])
     n_walls = len(layout.scene.walls)
     tied = [(int(np.searchsorted(moving, layout.node(c.bar_a, c.node_a))),
              int(np.searchsorted(moving, layout.node(c.bar_b, c.node_b))))
@@ -307,15 +305,29 @@ def gap_moves(layout: Layout, held: np.ndarray, nodes: np.ndarray, delta: np.nda
             group[root(a)] = root(b)
         members = np.array([root(i) for i in range(moving.size)])
         by_node = np.bincount(members, by_node, minlength=moving.size)[members]
-    bar = layout.bar_of(moving)
-    same = bar[1:] == bar[:-1]
-    with np.errstate(divide="ignore"):
-        link = np.where(same, 1.0 / np.diff(layout.compliance[moving]), 0.0)  # 1/c to the next
-    to_left, to_right = np.concatenate(([0.0], link)), np.append(link, 0.0)
     shifted_left = np.concatenate(([0.0], by_node[:-1]))
     shifted_right = np.append(by_node[1:], 0.0)
     change = (by_node * (to_left + to_right) + shifted_left * to_left + shifted_right * to_right)
     return largest(change), largest(by_node), (moving, by_node)
+
+
+def _moving_links(layout: Layout, moving: np.ndarray, nodes: np.ndarray
+                  ) -> tuple[np.ndarray, ...]:
+    """For :func:`gap_moves`, from the moving nodes alone (kept per set, read-only): which
+    of ``nodes`` move and the place of each among ``moving``, and each moving node's 1/c to
+    its moving neighbour on the left and on the right in its bar (0 where none)."""
+    index = np.full(layout.n_nodes, -1, dtype=np.intp)  # each moving node's place in moving
+    index[moving] = np.arange(moving.size)
+    place = index[nodes]
+    listed = place >= 0
+    bar = layout.bar_of(moving)
+    same = bar[1:] == bar[:-1]
+    with np.errstate(divide="ignore"):
+        link = np.where(same, 1.0 / np.diff(layout.compliance[moving]), 0.0)  # 1/c to the next
+    made = (listed, place[listed], np.concatenate(([0.0], link)), np.append(link, 0.0))
+    for array in made:
+        array.flags.writeable = False
+    return made
 
 
 def _largest_at(into: np.ndarray, at: np.ndarray, values: np.ndarray) -> None:

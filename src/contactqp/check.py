@@ -126,7 +126,8 @@ def external_forces(layout: Layout, contact_force: np.ndarray,
         at = np.flatnonzero(spread)
         nodes, loads = np.concatenate((nodes, at)), np.concatenate((loads, spread[at]))
     lam = np.asarray(contact_force, dtype=float).reshape(-1)
-    all_nodes = np.concatenate((nodes, contact_nodes, layout.support_nodes)).astype(np.intp)
+    all_nodes = (np.concatenate((nodes, contact_nodes, layout.support_nodes)).astype(np.intp)
+                 if layout.scene.distributed else layout.outside_nodes)
     forces = np.concatenate((loads, -values * lam[rows] if lam.size else np.zeros(rows.size),
                              np.asarray(reactions, dtype=float).reshape(-1)))
     return all_nodes, forces, int(loads.size)

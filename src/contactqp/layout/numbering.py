@@ -50,7 +50,7 @@ TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_positio
             "element_stiffness", "areas", "yield_stress", "compliance", "chained_compliance",
             "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes",
             "longest_bar", "row_compliance", "row_bars", "floating_bars", "wall_nodes_by_side",
-            "held_cache", "row_compliance_roots", "softest")
+            "held_cache", "row_compliance_roots", "softest", "outside_nodes")
 
 
 # ... and those that depend on the gaps but not on the load values: shared when only the
@@ -263,6 +263,14 @@ class Layout:
         compliance = self.row_compliance
         usable = np.isfinite(compliance) & (compliance > 0.0)
         return _read_only(np.where(usable, np.sqrt(np.where(usable, compliance, 1.0)), np.nan))
+
+    @cached_property
+    def outside_nodes(self) -> np.ndarray:
+        """The node of every force from outside but the distributed loads' (the point loads,
+        each contact row's nonzeros, the supports), in the order the check lists them
+        (:func:`contactqp.check.external_forces`)."""
+        return _read_only(np.concatenate((self.load_nodes, self.rows.node,
+                                          self.support_nodes)).astype(np.intp))
 
     @cached_property
     def softest(self) -> float:
