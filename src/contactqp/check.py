@@ -204,8 +204,7 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
     # the LCP needs K⁻¹, which a scene with a bar held only by contact does not have
     residuals["natural_map"] = (
         None if contact == "equality" or model.floating
-        else float(natural_map(lam, -bounds.penetration, free_gaps(model),
-                               row_compliance_roots(layout))) if natural else math.nan)
+        else _natural_residual(model, lam, bounds.penetration) if natural else math.nan)
     pulling = float(np.max(-lam, initial=0.0)) / F
     physical = pulling <= tolerances.sign
     notes = list(failures)
@@ -230,6 +229,22 @@ def natural_map(forces: np.ndarray, gaps: np.ndarray, free: np.ndarray,
         top = np.nanmax(np.abs(np.minimum(forces, gaps)), axis=-1, initial=0.0)
         size = np.nanmax(np.abs(free), axis=-1, initial=0.0)
     return top / np.where(size > 0.0, size, 1.0)
+
+
+def _natural_residual(model: Model, lam: np.ndarray, pen: np.ndarray) -> float:
+    """:func:`natural_map` of an answer on ``model``, with what depends on the model alone
+    (each row's scaling and the size of the free gaps it scales) kept on the model: the
+    same operations, the same number bit for bit."""
+    kept = model.__dict__.get("natural_scale")
+    if kept is None:
+        roots = row_compliance_roots(model.layout)
+        with np.errstate(invalid="ignore"):
+            size = np.nanmax(np.abs(free_gaps(model) / roots), initial=0.0)
+        kept = model.__dict__["natural_scale"] = (roots, size if size > 0.0 else 1.0)
+    roots, size = kept
+    with np.errstate(invalid="ignore"):
+        top = np.nanmax(np.abs(np.minimum(lam * roots, -pen / roots)), initial=0.0)
+    return float(top / size)
 
 
 def free_gaps(model: Model) -> np.ndarray:
