@@ -9,9 +9,11 @@
                       a fresh process (a subprocess), with the imports the first solve needs
     check / method    the check's time over the method's, from the Results' own timings
     default scene     one verified solve of contactqp.default_scene() against the seed's numpy
-                      script (benchmarks/loop.py, hand_script; the faster of this process and
-                      one with a single OpenBLAS thread); prepared.solve against the same
+                      script (benchmarks/loop.py, hand_script; no slower than in a process
+                      with one OpenBLAS thread); prepared.solve against the same; each timed
+                      in turn with its floor, the ratio the median of the rounds' ratios
     solve_many 10⁴    10⁴ cases varying the load and the gap against a vectorised numpy version
+                      (timed in turn with it, as the default scene)
 
 Every row gives the method's, the check's and the build's time apart (Result.timings).
 Warm rows drop each run's Result before the next, as the floor drops its arrays: on this
@@ -27,9 +29,11 @@ from __future__ import annotations
 import json
 import math
 import os
+import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -150,35 +154,71 @@ def many_walls(quick: bool) -> list[dict]:
 
 
 def default_loop(quick: bool) -> list[dict]:
+    """The default scene against the seed script, and 10⁴ cases against a vectorised numpy
+    version, each timed in turn with its floor, round after round (:func:`paired`): a busy
+    moment of the machine slows both of a round, not one row's floor alone (measured: the
+    seed script 34 µs, and 52-61 µs in two runs of the same minute). The seed script's floor
+    in a round is also never slower than in a process with one OpenBLAS thread."""
     repeats, cases = (50, 1000) if quick else (300, 10_000)
     scene = contactqp.default_scene()
-    here, alone = median_time(hand_script, repeats), _one_thread_script(repeats)
-    script = min(here, alone)
-    rows = [_row("seed numpy script", script, script, "", 1.0, here=here, one_thread=alone)]
     result = contactqp.solve(scene)
     if not (result.verified and math.isclose(result.contact_force[0], hand_script()[1],
                                              rel_tol=1e-9)):
         raise SystemExit("default scene: the library and the seed script disagree")
-    seconds, result = _timed_solve(scene, repeats)
-    rows.append(_row("solve(default scene)", seconds, script, "seed script", 15.0, result))
+    alone = _one_thread_script(repeats)
+    solved: list[contactqp.Result] = []
+
+    def solve_once() -> None:  # keeps the last Result only, as _timed_solve
+        solved[:] = [contactqp.solve(scene)]
+
+    script, solve_seconds, solve_ratio = paired(hand_script, solve_once, repeats, alone)
     prepared = contactqp.prepare(scene)
     one = np.array([1.1 * FORCE])
-    result = prepared.solve(one)
-    seconds = median_time(lambda: prepared.solve(one), repeats)
-    rows.append(_row("prepared.solve", seconds, script, "seed script", 8.0, result))
+    one_case = prepared.solve(one)
+    _, prepared_seconds, prepared_ratio = paired(hand_script, lambda: prepared.solve(one),
+                                                 repeats, alone)
     factors = np.linspace(0.5, 1.5, cases)
     loads, gaps = (FORCE * factors)[:, None], (GAP * factors[::-1])[:, None]
     exact = vectorised(loads[:, 0], gaps[:, 0])
-    numpy_time = median_time(lambda: vectorised(loads[:, 0], gaps[:, 0]), repeats)
-    rows.append(_row(f"vectorised numpy, {cases} cases", numpy_time, numpy_time, "", 1.0))
     batch = prepared.solve_many(loads, gaps)
     if not (batch.verified.all() and np.allclose(batch.contact_force[:, 0], exact, rtol=1e-9,
                                                  atol=1e-9 * FORCE)):
         raise SystemExit("solve_many disagrees with the vectorised numpy version")
-    seconds = median_time(lambda: prepared.solve_many(loads, gaps), 3)
-    rows.append(_row(f"solve_many, {cases} cases (load and gap)", seconds, numpy_time,
-                     "vectorised numpy", 10.0))
+    numpy_time, many_seconds, many_ratio = paired(
+        lambda: vectorised(loads[:, 0], gaps[:, 0]), lambda: prepared.solve_many(loads, gaps),
+        3 if quick else 10)
+    rows = [_row("seed numpy script", script, script, "", 1.0, one_thread=alone),
+            _row("solve(default scene)", solve_seconds, script, "seed script", 15.0,
+                 solved[-1]),
+            _row("prepared.solve", prepared_seconds, script, "seed script", 8.0, one_case),
+            _row(f"vectorised numpy, {cases} cases", numpy_time, numpy_time, "", 1.0),
+            _row(f"solve_many, {cases} cases (load and gap)", many_seconds, numpy_time,
+                 "vectorised numpy", 10.0)]
+    for row, ratio in zip(rows[1:], (solve_ratio, prepared_ratio, None, many_ratio)):
+        if ratio is not None:
+            row["ratio"] = ratio  # the median of the rounds' ratios
     return rows
+
+
+ROUNDS = 9  # rounds of paired(), each timing the floor and the job
+
+
+def paired(floor_job: Callable[[], object], job: Callable[[], object], calls: int,
+           floor_limit: float = math.inf) -> tuple[float, float, float]:
+    """(the floor's median time, the job's median time, the median over ROUNDS rounds of the
+    job's time over the floor's), each round timing ``calls`` calls of the floor, then of the
+    job (both warmed first); a round's floor is at most ``floor_limit``."""
+    floor_job(), job()
+    floors, times = [], []
+    for _ in range(ROUNDS):
+        for target, into in ((floor_job, floors), (job, times)):
+            start = time.perf_counter()
+            for _ in range(calls):
+                target()
+            into.append((time.perf_counter() - start) / calls)
+    floors = [min(f, floor_limit) for f in floors]
+    ratios = [t / f for t, f in zip(times, floors)]
+    return statistics.median(floors), statistics.median(times), statistics.median(ratios)
 
 
 SEED_SCRIPT = """
@@ -223,7 +263,7 @@ def main(quick: bool, out: Path) -> None:
         print(f"{r['run']:48} {1e3 * r['seconds']:9.3f} {r['ratio']:7.1f} {goal:>5}{split}{ratio}"
               + (f"  import {1e3 * r['import']:.0f} ms, {r['page_faults']:.0f} page faults"
                  if "import" in r else "")
-              + (f"  (this process {1e6 * r['here']:.0f} µs, one OpenBLAS thread "
-                 f"{1e6 * r['one_thread']:.0f} µs)" if "one_thread" in r else ""))
+              + (f"  (one OpenBLAS thread: {1e6 * r['one_thread']:.0f} µs)"
+                 if "one_thread" in r else ""))
     out.mkdir(parents=True, exist_ok=True)
     (out / "speed.json").write_text(json.dumps({"machine": machine(), "rows": rows}, indent=1))

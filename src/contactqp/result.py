@@ -274,7 +274,7 @@ def yield_warning(layout: Layout, stress: np.ndarray) -> tuple[float | None, lis
     if not ratio > 1.0:
         return ratio, []
     scene = layout.scene
-    e = int(np.nanargmax(ratios))
+    e = int(np.flatnonzero(ratios == ratio)[0])  # nanargmax's element, without its NaN pass
     where = f"element {e}"
     if len(scene.bars) > 1:
         start = int(layout.elements[0][e])  # the element's first node, in global numbering
