@@ -395,3 +395,49 @@ def test_the_own_model_page_runs_as_it_reads(capsys):
     pushed = result.reactions[np.isin(problem.prescribed, top)].sum()
     assert abs(pushed) == pytest.approx(result.contact_force.sum(), rel=1e-9)
     capsys.readouterr()
+
+
+# docs/benchmarks.md's issue-28 table: its "this round" column is the range over the speed
+# runs kept in docs/benchmark/speed/ (the speed.json each `benchmarks/run.py --cases speed`
+# writes), each cell read here from them
+SPEED_RUNS = BENCHMARK / "speed"
+SPEED_ROWS = {  # the table's measure -> the runs' rows it quotes ("/" between two)
+    "`solve(scene)` defaults, 10⁶ elements, one wall": ["solve(scene), 1000000 elements"],
+    "condensed Lagrange, 10⁶ elements": ["condensed lagrange, 1000000 elements"],
+    "10⁵ walls, warm re-solve (channel / flat patch)": [
+        "channel (100000 walls), warm re-solve", "flat patch (100000 walls), warm re-solve"],
+    "10⁵ walls, first solve in the process (channel / patch)": [
+        "channel (100000 walls), first solve (this process)",
+        "flat patch (100000 walls), first solve (this process)"],
+    "... the same in a fresh process (channel / patch)": [
+        "channel (100000 walls), first solve (fresh process)",
+        "flat patch (100000 walls), first solve (fresh process)"],
+    "one verified solve of the default scene / seed script": ["solve(default scene)"],
+    "`prepared.solve` / seed script": ["prepared.solve"],
+    "`solve_many`, 10⁴ cases (load and gap) / vectorised numpy": [
+        "solve_many, 10000 cases (load and gap)"],
+}
+CHECK_ROWS = {
+    "the check's time / the method's, 10⁶ one wall": ["solve(scene), 1000000 elements"],
+    "the check's time / the method's, 10⁵ walls (channel / patch)": [
+        "channel (100000 walls), warm re-solve", "flat patch (100000 walls), warm re-solve"],
+}
+
+
+def spread_of(values: list[float], unit: str) -> str:
+    low, high = f"{min(values):.1f}", f"{max(values):.1f}"
+    return f"{low}{unit}" if low == high else f"{low}–{high}{unit}"
+
+
+def test_the_speed_table_is_its_runs():
+    runs = [json.loads(path.read_text(encoding="utf-8"))["rows"]
+            for path in sorted(SPEED_RUNS.glob("*.json"))]
+    assert len(runs) >= 3, "docs/benchmark/speed/ keeps the runs its table quotes"
+    table = {line.split(" | ")[0].removeprefix("| "): line.split(" | ")
+             for line in BENCHMARKS_PAGE.read_text(encoding="utf-8").splitlines()
+             if line.startswith("| ")}
+    for rows, key, unit in ((SPEED_ROWS, "ratio", "×"), (CHECK_ROWS, "check_over_method", "")):
+        for measure, names in rows.items():
+            cell = " / ".join(spread_of([next(r[key] for r in run if r["run"] == name)
+                                         for run in runs], unit) for name in names)
+            assert table[measure][3].strip("* ") == cell, (measure, table[measure][3], cell)
