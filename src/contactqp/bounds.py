@@ -24,7 +24,7 @@ from contactqp.model import (
     penetration,
     seen_stiffness,
 )
-from contactqp.runs import Running, Runs, count_at_or_before, kept, runs
+from contactqp.runs import Running, count_at_or_before, kept, propagate
 
 ROUND_OFF = 4.0 * np.finfo(float).eps  # a few units in the last place of what is stored
 
@@ -150,71 +150,6 @@ def _wedged(layout: Layout) -> np.ndarray:
     if not layout.floating_bars.size:
         return np.zeros(layout.rows[3].size, dtype=bool)
     return wedged_rows(layout.scene)
-
-
-def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
-              outside: Running) -> tuple[float, float]:
-    """What the imbalance of an answer does with the ``held`` nodes (sorted) fixed: (the
-    largest force error at a held node, N; the largest displacement error, m).
-
-    r_j, the residual of cut j (element force from u against ``outside``, the running sum of
-    the outside forces over the nodes up to the cut), is a load pattern: its jumps are the
-    nodal imbalances. Between two held nodes the exact answer of the imbalanced scene has
-    element forces N_j − (c − r_j), i.e. its element force errors are c − r_j, with c such
-    that the run's elongation errors (c − r_j)/k_j add up to nothing; a run held at one end
-    only (a bar's tail or head) has c the cut residual past the bar's free end. The
-    displacement error is the running sum of the elongation errors from the held end, and a
-    held node's force error is the jump of c across it."""
-    element, compliance = layout.elements
-    if element.size == 0:
-        return 0.0, 0.0
-    if held.size == 0:  # bars with no support, and nothing in the answer holds them
-        return np.inf, np.inf
-    r = outside.plus(links)
-    if element.size != r.size:  # junctions between bars: not every link is an element
-        r = r[element]
-    run = runs(layout, held)
-    # c per run: weighted mean (held at both ends), the free end's cut residual otherwise
-    mean = run.reduce(np.add, r * compliance) / run.compliance
-    after_bar = outside.at(run.last)
-    before_bar = np.where(run.first > 0, outside.at(np.maximum(run.first - 1, 0)), 0.0)
-    c_run = np.where(run.left_held & run.right_held, mean,
-                     np.where(run.left_held, after_bar, before_bar))
-    sway = _sway(r, compliance, c_run, run)  # r reused there
-    # force error at each held node: the jump of c between the elements on either side of it
-    # (past a bar's end, the cut residual there)
-    start, end = run.held_start, run.held_end
-    c_at = c_run[run.run_of]
-    c_left = np.where(held > start, c_at[: held.size],
-                      np.where(start > 0, outside.at(np.maximum(start - 1, 0)), 0.0))
-    c_right = np.where(held < end, c_at[held.size:], outside.at(end))
-    return largest(c_left - c_right), sway
-
-
-def _sway(r: np.ndarray, compliance: np.ndarray, c_run: np.ndarray, run: Runs) -> float:
-    """The largest displacement error (m) of :func:`propagate` (``r`` is overwritten): element
-    e of a run stretches
-    by (c − r_e)/k_e too much, and the nodes move by the running sum of that from the run's
-    held end. The running sum over the chain once; per run only its largest and smallest
-    value, since |x − a| over a run is largest at one of them (x − a is monotone in x, in
-    floating point too)."""
-    starts, ends = run.starts, run.ends
-    c = c_run[0] if c_run.size == 1 else np.repeat(c_run, ends - starts)
-    # in r's own array (the caller's r is not read again): no new array over the chain
-    elongation = np.subtract(c, r, out=r)
-    elongation *= compliance
-    first = elongation[starts]
-    total = np.cumsum(elongation, out=elongation)
-    base = total[starts] - first  # the sum before each run
-    tail = total[ends - 1]  # ... and to its end
-    top, bottom = run.reduce(np.maximum, total), run.reduce(np.minimum, total)
-    # held at the left end: the nodes move by total − base; held only at the right end (a
-    # bar's free head): by tail − (the sum before each element), base included and the run's
-    # last value tail itself moving by 0
-    from_left = np.maximum(np.abs(top - base), np.abs(bottom - base))
-    from_right = np.maximum(np.maximum(np.abs(tail - top), np.abs(tail - bottom)),
-                            np.abs(tail - base))
-    return largest(np.where(run.left_held, from_left, from_right))
 
 
 def _release(layout: Layout, held: np.ndarray, pushing: np.ndarray, lam: np.ndarray,

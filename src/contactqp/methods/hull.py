@@ -37,7 +37,8 @@ import numpy as np
 
 from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
 from contactqp.methods.minorant import minorant_vertices
-from contactqp.model import Condensed, Model, count_up_to, largest, run_ends, run_starts, spread
+from contactqp.methods.stretch import Stretch, displacements
+from contactqp.model import Condensed, Model, count_up_to, largest, run_ends, run_starts
 from contactqp.result import Solution
 
 
@@ -145,45 +146,9 @@ class WallsOnChain:
 
     def displacements(self, pinned: np.ndarray, nodes: np.ndarray, w_held: np.ndarray
                       ) -> np.ndarray:
-        """u = u_free − w, w spread from its values ``w_held`` at the held ``nodes`` (the
-        mask ``pinned``) as :func:`contactqp.model.spread` spreads it (the same numbers); on
-        one bar worked out segment by segment where few nodes are held, and at the free
-        nodes alone where most are (a patch: 5 % of the nodes). u at the held nodes is left
-        for the caller."""
-        if self.bars > 1:
-            u = spread(self.model.layout, nodes, w_held)
-            return np.subtract(self.u_free, u, out=u)
-        # on one bar its ends and held nodes are in order: no sort as spread's among bars
-        phi = self.phi
-        x = np.concatenate((phi[:1], phi[nodes], phi[-1:]))
-        w = np.concatenate((w_held[:1], w_held, w_held[-1:]))
-        if nodes.size <= FEW_HELD:
-            return self._displacements_by_segment(x, w, np.concatenate(([-1], nodes, [self.n])))
-        if 4 * nodes.size < self.n:  # most nodes free: interpolate along the whole chain
-            u = np.interp(phi, x, w)
-            return np.subtract(self.u_free, u, out=u)
-        free = np.flatnonzero(~pinned)
-        u = np.empty(self.n)
-        u[free] = self.u_free[free] - np.interp(phi[free], x, w)
-        return u
-
-    def _displacements_by_segment(self, x: np.ndarray, w: np.ndarray, at: np.ndarray
-                                  ) -> np.ndarray:
-        """u = u_free − w at the nodes strictly between the nodes ``at`` (−1 and n at the
-        ends), w linear in φ from (x, w) at each to the next: numpy.interp's arithmetic,
-        slope·(φ − x_k) + w_k, segment by segment in place (3 ms → 0.5 ms on 10⁶ nodes: no
-        search for each node's segment)."""
-        u = np.empty(self.n)
-        for k in range(at.size - 1):
-            a, b = int(at[k]) + 1, int(at[k + 1])
-            if a >= b:
-                continue
-            slope = (w[k + 1] - w[k]) / (x[k + 1] - x[k])
-            part = np.subtract(self.phi[a:b], x[k], out=u[a:b])
-            part *= slope
-            part += w[k]
-            np.subtract(self.u_free[a:b], part, out=part)
-        return u
+        """u = u_free − w, w spread from ``w_held`` at the held ``nodes`` (the mask
+        ``pinned``): :func:`contactqp.methods.stretch.displacements`."""
+        return displacements(self.model.layout, self.u_free, pinned, nodes, w_held)
 
     def head_load(self, nodes: np.ndarray) -> np.ndarray:
         """The force in the element just left of each of ``nodes``, the first held node of its
@@ -339,37 +304,6 @@ class WallsOnChain:
                 work.append((other, found, sub))
 
 
-class Stretch:
-    """Nodes ``first`` .. ``stop`` − 1 between the held nodes ``left`` and ``right`` (None: a
-    free end there), and w = u_free − u at those two (None at a free end)."""
-
-    def __init__(self, first: int, stop: int, left: int | None, right: int | None,
-                 w_left: float | None, w_right: float | None) -> None:
-        self.first, self.stop, self.left, self.right = first, stop, left, right
-        self.w_left, self.w_right = w_left, w_right
-
-    def anchors(self, inner: np.ndarray, w_inner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The held nodes of the stretch with ``inner`` held too, in order, and w at each."""
-        nodes, w = [inner], [w_inner]
-        if self.left is not None:
-            nodes.insert(0, [self.left])
-            w.insert(0, [self.w_left])
-        if self.right is not None:
-            nodes.append([self.right])
-            w.append([self.w_right])
-        return np.concatenate(nodes).astype(np.intp), np.concatenate(w)
-
-    def between(self, inner: np.ndarray, k: int, w_inner: np.ndarray) -> Stretch:
-        """The sub-stretch between held nodes ``inner`` k − 1 and k (the ends beyond them)."""
-        left = self.left if k == 0 else int(inner[k - 1])
-        right = self.right if k == inner.size else int(inner[k])
-        return Stretch(self.first if k == 0 else left + 1, self.stop if k == inner.size else right,
-                       left, right,
-                       self.w_left if k == 0 else float(w_inner[k - 1]),
-                       self.w_right if k == inner.size else float(w_inner[k]))
-
-
-FEW_HELD = 32  # held nodes on one bar up to which u is worked out segment by segment
 MAX_SETTLING = 4096  # sub-stretches settled at most per stretch and step (the steps go on)
 
 
