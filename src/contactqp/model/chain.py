@@ -6,7 +6,7 @@ storage and solved in O(n): by statics when every bar is held by one support, el
 banded Cholesky factorisation. With the Lagrangian L = Π + λᵀ(C u − g), λ >= 0 is the force
 with which each wall (or the other bar) pushes, and the contacts' force on the nodes is −Cᵀλ.
 
-(About 415 lines, just past the ~400 the project keeps to: the Model and every solve with K
+(About 420 lines, just past the ~400 the project keeps to: the Model and every solve with K
 it offers the methods, in one place; the condensed chain is in condense.py.)
 """
 
