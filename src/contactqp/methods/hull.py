@@ -24,8 +24,9 @@ wall's force is the kink of w there. The same equations as the textbook loop
 
 The textbook loop adds every passed wall, so its active set crosses a contact patch a few
 nodes per step (steps grow with the mesh); the hull adds a patch's walls in one step. Measured
-in ``benchmarks/run.py --cases contacts``: 2 to 7 steps at every size from 10³ to 10⁶ walls
-on the benchmark's obstacles. A set that comes back or more than ``max_iterations`` steps
+on the builders' obstacle, channel and flat patch: 2 steps at every size from 10³ to 10⁶
+walls (``benchmarks/run.py --cases contacts``; the channel took 6-7 before a step settled both
+sides of a stretch). A set that comes back or more than ``max_iterations`` steps
 hands over to the textbook loop from the set reached (reported in the Solution's info).
 """
 
