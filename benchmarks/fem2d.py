@@ -28,7 +28,6 @@ means within 1e-5·F). Writes runs.json, table.md and speed_accuracy.png to DIR/
 from __future__ import annotations
 
 import json
-import multiprocessing
 import statistics
 import time
 import warnings
@@ -40,7 +39,7 @@ from typing import Any
 import numpy as np
 
 import contactqp
-from cases import machine
+from cases import in_child, machine
 from contactqp.errors import OptionError, SolverError
 from contactqp.methods import qp as qpmod
 from hertz import ZONE
@@ -150,19 +149,8 @@ def measure(problem: contactqp.Problem, run: Run, exact: np.ndarray, base: float
 
 
 def isolated(timeout: float, *args: Any) -> dict[str, Any]:
-    """measure() in a forked child, stopped after ``timeout`` s (a solver stuck in its C code
-    cannot be interrupted from Python)."""
-    context = multiprocessing.get_context("fork")
-    receive, send = context.Pipe(duplex=False)
-    child = context.Process(target=lambda: send.send(measure(*args)), daemon=True)
-    child.start()
-    send.close()
-    found = receive.recv() if receive.poll(timeout) else None
-    child.join(1.0)
-    if child.is_alive():
-        child.kill()
-        child.join()
-    receive.close()
+    """measure() in a forked child, stopped after ``timeout`` s (:func:`cases.in_child`)."""
+    found = in_child(timeout, measure, *args)
     return found or {"outcome": "skipped", "why": f"time limit: stopped after {timeout:.0f} s"}
 
 

@@ -39,7 +39,6 @@ from __future__ import annotations
 import csv
 import json
 import math
-import multiprocessing
 import statistics
 import sys
 import time
@@ -52,7 +51,16 @@ from typing import Any
 import numpy as np
 
 import contactqp
-from cases import default_with, floor, free_bar, machine, obstacle, tapered_scene, touching
+from cases import (
+    default_with,
+    floor,
+    free_bar,
+    in_child,
+    machine,
+    obstacle,
+    tapered_scene,
+    touching,
+)
 from contactqp.errors import OptionError, SceneError, SolverError
 from contactqp.methods import qp as qpmod
 from contactqp.methods.complementarity import LCP_ENTRIES, LCP_ROWS, contact_lcp
@@ -237,19 +245,8 @@ def run_caught(*args: Any) -> dict[str, Any]:
 
 
 def run_isolated(*args: Any) -> dict[str, Any]:
-    """run_caught in a forked child, stopped after TIMEOUT s: a solver stuck in its C code
-    (SCS at accuracy "high" on 1e5 elements: 230 s) cannot be interrupted from Python."""
-    context = multiprocessing.get_context("fork")
-    receive, send = context.Pipe(duplex=False)
-    child = context.Process(target=lambda: send.send(run_caught(*args)), daemon=True)
-    child.start()
-    send.close()
-    found = receive.recv() if receive.poll(TIMEOUT) else None
-    child.join(1.0)
-    if child.is_alive():
-        child.kill()
-        child.join()
-    receive.close()
+    """run_caught in a forked child, stopped after TIMEOUT s (:func:`cases.in_child`)."""
+    found = in_child(TIMEOUT, run_caught, *args)
     return found if found is not None else {"skip_reason": f"timed out after {TIMEOUT:.0f} s"}
 
 
