@@ -223,28 +223,36 @@ def natural_map(forces: np.ndarray, gaps: np.ndarray, free: np.ndarray,
     each row sees with the supports held, :func:`row_compliance_roots`) each row is scaled as
     the LCP scaled to a unit diagonal is, z = λ·r, w/r, q/r, so that the number is the same in
     every unit system. Over the last axis (one value per case for cases x rows)."""
+    return _natural_top(forces, gaps, roots) / _natural_size(free, roots)
+
+
+def _natural_top(forces: np.ndarray, gaps: np.ndarray, roots: np.ndarray | None
+                 ) -> np.ndarray:
+    """‖min(z, w)‖∞ of :func:`natural_map`, each row scaled by ``roots`` (if given)."""
     if roots is not None:  # λ = D z and D w, D = diag(W)^-½ = 1/roots
-        forces, gaps, free = forces * roots, gaps / roots, free / roots
+        forces, gaps = forces * roots, gaps / roots
     with np.errstate(invalid="ignore"):
-        top = np.nanmax(np.abs(np.minimum(forces, gaps)), axis=-1, initial=0.0)
+        return np.nanmax(np.abs(np.minimum(forces, gaps)), axis=-1, initial=0.0)
+
+
+def _natural_size(free: np.ndarray, roots: np.ndarray | None) -> np.ndarray:
+    """‖q‖∞ of :func:`natural_map` (1 where it is 0), each row scaled by ``roots``."""
+    if roots is not None:
+        free = free / roots
+    with np.errstate(invalid="ignore"):
         size = np.nanmax(np.abs(free), axis=-1, initial=0.0)
-    return top / np.where(size > 0.0, size, 1.0)
+    return np.where(size > 0.0, size, 1.0)
 
 
 def _natural_residual(model: Model, lam: np.ndarray, pen: np.ndarray) -> float:
     """:func:`natural_map` of an answer on ``model``, with what depends on the model alone
-    (each row's scaling and the size of the free gaps it scales) kept on the model: the
-    same operations, the same number bit for bit."""
+    (each row's scaling and the size of the free gaps it scales) kept on the model."""
     kept = model.__dict__.get("natural_scale")
     if kept is None:
         roots = row_compliance_roots(model.layout)
-        with np.errstate(invalid="ignore"):
-            size = np.nanmax(np.abs(free_gaps(model) / roots), initial=0.0)
-        kept = model.__dict__["natural_scale"] = (roots, size if size > 0.0 else 1.0)
+        kept = model.__dict__["natural_scale"] = (roots, _natural_size(free_gaps(model), roots))
     roots, size = kept
-    with np.errstate(invalid="ignore"):
-        top = np.nanmax(np.abs(np.minimum(lam * roots, -pen / roots)), initial=0.0)
-    return float(top / size)
+    return float(_natural_top(lam, -pen, roots) / size)
 
 
 def free_gaps(model: Model) -> np.ndarray:
