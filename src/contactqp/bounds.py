@@ -39,11 +39,11 @@ class Bounds:
 
 def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarray,
                  nodes: np.ndarray, external: np.ndarray, r_max: float, contact: str,
-                 F: float, U: float, hold: float, outside: np.ndarray | None = None,
+                 F: float, U: float, hold: float, outside: Running,
                  u_size: float | None = None) -> Bounds:
     """The residuals and the error bounds of an answer (module docstring); a contact whose
     force passes ``hold`` × F counts as pushing when the held nodes are chosen. ``outside``:
-    the running sum of ``external`` over the nodes, ``u_size`` ‖u‖∞, when the caller has them.
+    the running sum of ``external`` over the nodes; ``u_size`` ‖u‖∞, when the caller has it.
 
     The answer is exact for a nearby scene: the rows that push are held at where the answer
     puts them (their gaps moved by δ = |penetration|), the other rows' forces and every
@@ -65,12 +65,10 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     n_loads = external.size - row_nodes.size - layout.support_nodes.size
     # the contacts of the nearby scene carry only the rest
     contact_part = slice(n_loads, n_loads + row_nodes.size)
-    if outside is None or np.any(external[contact_part][~pushing[rows]]):
+    if np.any(external[contact_part][~pushing[rows]]):
         kept_external = external.copy()
         kept_external[contact_part][~pushing[rows]] = 0.0
         outside = Running.of(layout.n_nodes, nodes, kept_external)
-    else:
-        outside = Running(None, outside)
     force_error, sway = propagate(layout, held, links, outside)
     pair = 0.0 if equality else opposed_forces(layout, lam)
     # an open row moved onto its wall (it penetrates) is held too, with no force of its own

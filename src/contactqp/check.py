@@ -58,6 +58,7 @@ from contactqp.model import (
     penetration,
     scene_model,
 )
+from contactqp.runs import Running
 from contactqp.scene import Scene, row_names
 
 
@@ -189,10 +190,10 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
     finite = math.isfinite(u_size) and all(np.isfinite(a).all() for a in (lam, reactions))
     if not finite:  # a NaN or infinite answer: no residual can pass
         return _failed(contact, lam, F, U, tolerances)
-    # E_j, the outside forces on nodes 0..j, once for both (where they are many)
-    outside = (np.cumsum(np.bincount(nodes, external, minlength=layout.n_nodes))
-               if 8 * nodes.size > links.size else None)
-    r_max = section_residual(links, nodes, external, outside)
+    # E_j, the outside forces on nodes 0..j, once for both (at every node where they are many)
+    outside = Running.of(layout.n_nodes, nodes, external)
+    r_max = section_residual(links, nodes, external,
+                             outside.levels if outside.steps is None else None)
     bounds = error_bounds(layout, u, lam, links, nodes, external, r_max, contact, F, U,
                           tolerances.complementarity, outside, u_size)
     residuals = {name: value for name, value in bounds.residuals.items()}
