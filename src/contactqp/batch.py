@@ -32,19 +32,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from contactqp.check import TOLERANCES, check, natural_map, row_compliance_roots
+from contactqp.check import TOLERANCES, natural_map, row_compliance_roots
 from contactqp.errors import ContactqpError, SceneError, SolverError
 from contactqp.methods import cases as many
 from contactqp.model import (
     Model,
     displacement_scale_rule,
-    element_forces,
     force_scale_rule,
-    link_forces,
-    penetration,
 )
 from contactqp.progress import Progress
-from contactqp.result import Result, Solution, make_result, support_reactions
+from contactqp.result import Checked, Result, Solution, checked, make_result
 from contactqp.scene import Scene
 from contactqp.scene.scene import side_by_side
 
@@ -183,20 +180,22 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
     solution = Solution(solved.u_free.ravel(), tiled_rows(solved.contact_force, walls),
                         prepared.method, int(solved.iterations.max(initial=0)),
                         "solved with the batch")
-    together = _checked_together(model, solution, prepared.contact)
+    # the tiled answer checked as one scene, without a natural map over every case's rows
+    # (each case's is read from its rows) and without the stresses a Batch does not hold
+    together = checked(model, solution, prepared.contact, natural=False)
     F, U = case_scales(model, cases, solved.free_displacement, gap_cases)
     lam = solved.contact_force
-    residuals, checked = _case_residuals(prepared, together, solved, gap_cases, F, U)
+    residuals, names = _case_residuals(prepared, together, solved, gap_cases, F, U)
     verified = solved.settled & np.all(
-        [residuals[name] <= SPARE * getattr(TOLERANCES, name) for name in checked
-         if together.residuals[name] is not None], axis=0)
+        [residuals[name] <= SPARE * getattr(TOLERANCES, name) for name in names
+         if together.check.residuals[name] is not None], axis=0)
     physical = many.row_reduce(np.minimum, lam, initial=0.0) >= -TOLERANCES.sign * F
     alone, failures = _alone_where_flagged(prepared, loads, gaps, solved, verified)
     batch = Batch(prepared, loads, gaps, np.array(together.u).reshape(cases, -1), lam.copy(),
                   np.array(together.reactions).reshape(cases, -1),
                   per_case_rows(together.penetration, walls, cases), verified, physical,
-                  residuals, np.full(cases, together.force_error_bound),
-                  np.full(cases, together.displacement_error_bound), F, U,
+                  residuals, np.full(cases, together.check.force_error_bound),
+                  np.full(cases, together.check.displacement_error_bound), F, U,
                   solved.iterations, prepared.method, alone, failures)
     for case, result in alone.items():
         _take(batch, case, result)
@@ -206,36 +205,7 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
     return batch
 
 
-@dataclass(frozen=True)
-class _Together:
-    """What a batch reads from the check of all its cases as one tiled scene (the fields a
-    Result would carry of it; no stresses, no natural map: those are read case by case)."""
-
-    u: np.ndarray
-    reactions: np.ndarray
-    penetration: np.ndarray
-    residuals: dict[str, float | None]
-    force_error_bound: float
-    displacement_error_bound: float
-    force_scale: float
-    displacement_scale: float
-
-
-def _checked_together(model: Model, solution: Solution, contact: str) -> _Together:
-    """The tiled answer checked as one scene (contactqp.check), as make_result would check
-    it, without the quantities a batch does not read."""
-    layout = model.layout
-    u = model.full_displacements(np.asarray(solution.u_free, dtype=float))
-    lam = np.asarray(solution.contact_force, dtype=float)
-    forces = element_forces(layout, u)
-    reactions = support_reactions(layout, link_forces(layout, forces), lam)
-    found = check(model, u, lam, reactions, contact, element_force=forces, natural=False)
-    return _Together(u, reactions, penetration(layout, u), found.residuals,
-                     found.force_error_bound, found.displacement_error_bound,
-                     found.force_scale, found.displacement_scale)
-
-
-def _case_residuals(prepared: Prepared, together: _Together, solved: many.CasesSolution,
+def _case_residuals(prepared: Prepared, together: Checked, solved: many.CasesSolution,
                     gap_cases: np.ndarray, F: np.ndarray, U: np.ndarray
                     ) -> tuple[dict[str, np.ndarray], list[str]]:
     """Each case's residuals, relative to its own scales F and U (the batch's residuals are
@@ -243,19 +213,20 @@ def _case_residuals(prepared: Prepared, together: _Together, solved: many.CasesS
     cases, walls = len(F), len(prepared.scene.walls)
     lam = solved.contact_force
     residuals = {}
-    checked = [name for name in together.residuals if hasattr(TOLERANCES, name)]
-    for name in checked:
-        value = together.residuals[name]
-        scale = together.displacement_scale / U if name == "displacement" else (
-            together.force_scale / F)
+    found = together.check
+    names = [name for name in found.residuals if hasattr(TOLERANCES, name)]
+    for name in names:
+        value = found.residuals[name]
+        scale = found.displacement_scale / U if name == "displacement" else (
+            found.force_scale / F)
         residuals[name] = np.full(cases, np.nan) if value is None else value * scale
     residuals["natural_map"] = np.full(cases, np.nan)  # case by case, from the rows
-    if together.residuals["natural_map"] is not None:
+    if found.residuals["natural_map"] is not None:
         free = gap_cases - (prepared.model.C @ solved.free_displacement.T).T
         residuals["natural_map"] = natural_map(
             lam, -per_case_rows(together.penetration, walls, cases), free,
             row_compliance_roots(prepared.model.layout))
-    return residuals, checked
+    return residuals, names
 
 
 def _alone_where_flagged(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from contactqp import formatting
-from contactqp.check import GUARANTEE, TOLERANCES, Tolerances, check
+from contactqp.check import GUARANTEE, TOLERANCES, Check, Tolerances, check
 from contactqp.model import (
     Layout,
     Model,
@@ -287,11 +287,23 @@ def yield_warning(layout: Layout, stress: np.ndarray) -> tuple[float | None, lis
     return ratio, [warning]
 
 
-def make_result(model: Model, solution: Solution, *, method: str, contact: str,
-                options: dict[str, Any], timings: dict[str, float],
-                tolerances: Tolerances = TOLERANCES) -> Result:
-    """Build the Result of a solution: derive every quantity from u and λ, then check it."""
-    start = time.perf_counter()
+@dataclass(frozen=True)
+class Checked:
+    """A solution's answer at every node and its check (:func:`checked`): u, λ, the element
+    forces, the reactions, the penetration of every row, and the Check."""
+
+    u: np.ndarray
+    contact_force: np.ndarray
+    element_force: np.ndarray
+    reactions: np.ndarray
+    penetration: np.ndarray
+    check: Check
+
+
+def checked(model: Model, solution: Solution, contact: str,
+            tolerances: Tolerances = TOLERANCES, natural: bool = True) -> Checked:
+    """Derive every quantity from u and λ of a solution, then check it (``natural``: with the
+    natural-map residual, :func:`contactqp.check.check`)."""
     layout = model.layout
     u = model.full_displacements(np.asarray(solution.u_free, dtype=float))
     lam = np.asarray(solution.contact_force, dtype=float).reshape(-1)
@@ -299,15 +311,27 @@ def make_result(model: Model, solution: Solution, *, method: str, contact: str,
     # reactions are what equilibrium at the supports needs (the force of the elements on each
     # side, less loads and contacts there); the check then tests every section of every bar
     reactions = support_reactions(layout, link_forces(layout, forces), lam)
-    stress = forces / layout.areas
-    ratio, warnings = yield_warning(layout, stress)
-    found = check(model, u, lam, reactions, contact, tolerances, element_force=forces)
+    found = check(model, u, lam, reactions, contact, tolerances, element_force=forces,
+                  natural=natural)
+    return Checked(u, lam, forces, reactions, penetration(layout, u), found)
+
+
+def make_result(model: Model, solution: Solution, *, method: str, contact: str,
+                options: dict[str, Any], timings: dict[str, float],
+                tolerances: Tolerances = TOLERANCES) -> Result:
+    """Build the Result of a solution: derive every quantity from u and λ, then check it."""
+    start = time.perf_counter()
+    done = checked(model, solution, contact, tolerances)
+    found, forces = done.check, done.element_force
+    stress = forces / model.layout.areas
+    ratio, warnings = yield_warning(model.layout, stress)
     timings = {**timings, "check": time.perf_counter() - start}
     warnings += claim_warnings(solution, found.verified)
     return Result(
         model=model, method=method, solver=solution.solver, contact=contact,
-        options=dict(options), u=u, contact_force=lam, reactions=reactions,
-        penetration=penetration(layout, u), element_force=forces, stress=stress,
+        options=dict(options), u=done.u, contact_force=done.contact_force,
+        reactions=done.reactions, penetration=done.penetration, element_force=forces,
+        stress=stress,
         stress_ratio=ratio, residuals=found.residuals, verified=found.verified,
         physical=found.physical, message=found.message,
         force_error_bound=found.force_error_bound,
@@ -319,5 +343,5 @@ def make_result(model: Model, solution: Solution, *, method: str, contact: str,
     )
 
 
-__all__ = ["Reported", "Result", "Solution", "claim_warnings", "make_result", "plain",
-           "support_reactions"]
+__all__ = ["Checked", "Reported", "Result", "Solution", "checked", "claim_warnings",
+           "make_result", "plain", "support_reactions"]
