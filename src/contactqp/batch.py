@@ -37,6 +37,7 @@ from contactqp.errors import ContactqpError, SceneError, SolverError
 from contactqp.methods import cases as many
 from contactqp.model import (
     Model,
+    bar_load_terms,
     displacement_scale_rule,
     force_scale_rule,
 )
@@ -82,16 +83,40 @@ def tiled_rows(values: np.ndarray, walls: int) -> np.ndarray:
 def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
                 gaps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(F, U) of every case of a tiled model, by the rules of :attr:`Model.force_scale` and
-    :func:`contactqp.model.displacement_scale` (``free_displacement`` and ``gaps`` per case)."""
+    :func:`contactqp.model.displacement_scale` (``free_displacement`` and ``gaps`` per case);
+    and the tiled model's own F and U set by the same rules from the largest of every case's
+    terms. Each case's load terms come from its own running sum (nodes x cases, one column
+    per case): the same numbers as the case alone, where the tiled chain's running sum over
+    every case before it would differ in round-off."""
     layout, walls = model.layout, len(model.scene.walls) // cases
     largest = partial(many.row_reduce, np.maximum, initial=0.0)  # each case's largest
-    widest = largest(np.abs(gaps))
-    U = displacement_scale_rule(largest(np.abs(free_displacement)), largest(-gaps), widest,
-                                layout.longest_bar)
-    load = many.row_reduce(np.maximum, layout.load_terms.reshape(cases, -1))
+    free, depth, widest = (largest(np.abs(free_displacement)), largest(-gaps),
+                           largest(np.abs(gaps)))
+    U = displacement_scale_rule(free, depth, widest, layout.longest_bar)
+    nodal = np.ascontiguousarray(layout.nodal_loads.reshape(cases, -1).T)  # nodes x cases
+    offsets = layout.node_offsets[: len(model.scene.bars) // cases + 1]
+    load = bar_load_terms(nodal, _running_sum(nodal), offsets).max(axis=0)
     press = largest(per_case_rows(layout.press_fit_forces, walls, cases))
     F = force_scale_rule(load, press, layout.softest, U)
+    # max is exact: U over every case is the tiled model's own U bit for bit
+    U_all = float(displacement_scale_rule(free.max(), depth.max(), widest.max(),
+                                          layout.longest_bar))
+    model.__dict__["displacement_scale"] = U_all
+    model.__dict__["force_scale"] = float(force_scale_rule(load.max(), press.max(),
+                                                           layout.softest, U_all))
     return F, U
+
+
+def _running_sum(columns: np.ndarray) -> np.ndarray:
+    """np.cumsum(columns, axis=0), the same numbers: row by row where the rows are fewer than
+    the columns (numpy accumulates down short columns one column at a time: 10⁴ cases of 5
+    nodes, 0.24 ms against 0.02 ms row by row)."""
+    if columns.shape[0] > columns.shape[1]:
+        return np.cumsum(columns, axis=0)
+    total = columns.copy()
+    for i in range(1, total.shape[0]):
+        np.add(total[i - 1], total[i], out=total[i])
+    return total
 
 
 @dataclass(frozen=True, eq=False)
@@ -182,8 +207,8 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
                         "solved with the batch")
     # the tiled answer checked as one scene, without a natural map over every case's rows
     # (each case's is read from its rows) and without the stresses a Batch does not hold
-    together = checked(model, solution, prepared.contact, natural=False)
     F, U = case_scales(model, cases, solved.free_displacement, gap_cases)
+    together = checked(model, solution, prepared.contact, natural=False)
     lam = solved.contact_force
     residuals, names = _case_residuals(prepared, together, solved, gap_cases, F, U)
     verified = solved.settled & np.all(

@@ -6,6 +6,7 @@ bar grouping).
 
 from contactqp.layout.derived import (
     bar_groups,
+    bar_load_terms,
     contact_forces_on_nodes,
     count_up_to,
     element_forces,
@@ -23,7 +24,7 @@ from contactqp.layout.derived import (
 )
 from contactqp.layout.numbering import TOPOLOGY, ContactRows, Layout
 
-__all__ = ["TOPOLOGY", "ContactRows", "Layout", "bar_groups", "contact_forces_on_nodes",
+__all__ = ["TOPOLOGY", "ContactRows", "Layout", "bar_groups", "bar_load_terms", "contact_forces_on_nodes",
            "count_up_to", "element_forces", "in_set", "largest", "link_forces",
            "load_force_scale", "load_force_terms", "node_set", "penetration", "run_ends",
            "run_starts", "seen_stiffness", "spread"]

@@ -52,7 +52,12 @@ def link_forces(layout: Layout, forces: np.ndarray) -> np.ndarray:
     """Element forces placed on the links between global nodes j and j + 1 (0 at a junction)."""
     if not layout.junctions.size:
         return forces
-    return np.insert(forces, layout.junctions - np.arange(layout.junctions.size), 0.0)
+    element = layout.elements[0]
+    if element.size != np.size(forces):  # not one force per element: as np.insert places it
+        return np.insert(forces, layout.junctions - np.arange(layout.junctions.size), 0.0)
+    links = np.zeros(layout.n_nodes - 1)  # placed (np.insert: 10x slower on a batch)
+    links[element] = forces
+    return links
 
 
 def contact_forces_on_nodes(layout: Layout, contact_force: np.ndarray) -> np.ndarray:
@@ -202,14 +207,24 @@ def load_force_scale(layout: Layout) -> float:
 def load_force_terms(layout: Layout) -> np.ndarray:
     """Per node, the largest of |the loads' resultant on either side of it in its bar| and
     |its nodal load| (N): :func:`load_force_scale` is the largest over the nodes."""
-    loads = layout.nodal_loads
-    offsets = layout.node_offsets
+    return bar_load_terms(layout.nodal_loads, layout.running_load, layout.node_offsets)
+
+
+def bar_load_terms(loads: np.ndarray, running: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """:func:`load_force_terms` from the nodal ``loads``, their running sum along the chain
+    and the bars' first nodes (``offsets``, the node count last), along the first axis: a
+    batch gives nodes x cases and gets each case's terms, the same numbers as the case alone
+    gives (its running sum starts at its own node 0)."""
     sizes = np.diff(offsets)
-    left = layout.running_load.copy()
-    # from each bar's node 0
-    left -= np.repeat(np.concatenate(([0.0], left[offsets[1:-1] - 1])), sizes)
-    right = np.repeat(left[offsets[1:] - 1], sizes) - left
-    return np.maximum(np.maximum(np.abs(left), np.abs(right)), np.abs(loads))
+    left = running.copy()
+    if sizes.size > 1:  # from each bar's node 0 (the first bar's is the chain's)
+        left[offsets[1]:] -= np.repeat(left[offsets[1:-1] - 1], sizes[1:], axis=0)
+    right = np.repeat(left[offsets[1:] - 1], sizes, axis=0)
+    # in place: each array over the chain is a fresh allocation, and on a VM its pages cost
+    right -= left
+    np.abs(left, out=left)
+    np.maximum(left, np.abs(right, out=right), out=left)
+    return np.maximum(left, np.abs(loads, out=right), out=left)
 
 
 def bar_groups(scene: Scene, rows: np.ndarray) -> np.ndarray:
@@ -229,6 +244,7 @@ def bar_groups(scene: Scene, rows: np.ndarray) -> np.ndarray:
     return connected_components(graph, directed=False)[1]
 
 
-__all__ = ["bar_groups", "contact_forces_on_nodes", "count_up_to", "element_forces", "in_set",
-           "largest", "link_forces", "load_force_scale", "load_force_terms", "node_set",
+__all__ = ["bar_groups", "bar_load_terms", "contact_forces_on_nodes", "count_up_to",
+           "element_forces", "in_set", "largest", "link_forces", "load_force_scale",
+           "load_force_terms", "node_set",
            "penetration", "run_ends", "run_starts", "seen_stiffness", "spread", "wall_arrays"]

@@ -94,11 +94,15 @@ def solve_cases(model: Model, contact: str, loads: np.ndarray, gaps: np.ndarray,
         # every case still open (as a batch often starts): views, not copies of every array
         pick = slice(None) if open_cases.size == cases else open_cases
         now = active[pick]
-        forces, singular = _held_forces(W, soft, q[pick], now)
-        lam[pick] = forces
         steps[pick] += 1
-        u = u_free[pick] - forces @ flexibility_columns.T
-        penetration = q[pick] - forces @ W  # C u − g
+        if now.any():
+            forces, singular = _held_forces(W, soft, q[pick], now)
+            lam[pick] = forces
+            u = u_free[pick] - forces @ flexibility_columns.T
+            penetration = q[pick] - forces @ W  # C u − g
+        else:  # no row held (the first step): no force, and u is K⁻¹P
+            forces, singular = lam[pick], np.zeros(now.shape[0], dtype=bool)
+            u, penetration = u_free[pick], q[pick]
         disp_tol = DECISION_RTOL * np.maximum(row_reduce(np.maximum, np.abs(u), initial=0.0),
                                               floor[pick])[:, None]
         if penalty is None:
@@ -123,6 +127,9 @@ def _held_forces(W: np.ndarray, soft: float, q: np.ndarray,
     singular = np.zeros(q.shape[0], dtype=bool)
     if q.shape[0] == 1:
         first, which = np.zeros(1, dtype=np.intp), np.zeros(1, dtype=np.intp)
+    elif q.shape[1] == 1:  # one row: the cases that hold it
+        _one_row(lam, W, soft, q, np.flatnonzero(active[:, 0]), 0)
+        return lam, singular
     else:  # each case's set as one integer (rows <= 64), so that finding the sets sorts numbers
         keys = active @ np.left_shift(np.uint64(1), np.arange(q.shape[1], dtype=np.uint64))
         _, first, which = np.unique(keys, return_index=True, return_inverse=True)
@@ -131,18 +138,28 @@ def _held_forces(W: np.ndarray, soft: float, q: np.ndarray,
             continue
         members = np.flatnonzero(which == index)
         rows = np.flatnonzero(held)
+        if rows.size == 1:
+            _one_row(lam, W, soft, q, members, int(rows[0]))
+            continue
         system = W[np.ix_(rows, rows)] + soft * np.eye(rows.size)
         try:
             forces = np.linalg.solve(system, q[np.ix_(members, rows)].T).T
         except np.linalg.LinAlgError:
             singular[members] = True
             continue
-        if rows.size > 1 and np.linalg.cond(system) > 1.0 / (64.0 * np.finfo(float).eps):
-            # dependent rows (one row alone never is: W_ii is the compliance at the row)
+        if np.linalg.cond(system) > 1.0 / (64.0 * np.finfo(float).eps):  # dependent rows
             singular[members] = True
             continue
         lam[np.ix_(members, rows)] = forces
     return lam, singular
+
+
+def _one_row(lam: np.ndarray, W: np.ndarray, soft: float, q: np.ndarray, members: np.ndarray,
+             row: int) -> None:
+    """λ of the ``members`` cases that hold row ``row`` alone: its penetration over its
+    compliance (W_ii + soft > 0: the compliance at the row, never singular), by a division
+    rather than a solve (a 1 x 1 solve of 5 000 cases: 0.27 ms)."""
+    lam[members, row] = q[members, row] / (W[row, row] + soft)
 
 
 __all__ = ["CASES_ENTRIES", "CASES_ROWS", "CasesSolution", "fits", "row_reduce", "solve_cases"]

@@ -12,6 +12,7 @@ from contactqp.layout import (
     ContactRows,
     Layout,
     bar_groups,
+    bar_load_terms,
     contact_forces_on_nodes,
     count_up_to,
     element_forces,
@@ -42,7 +43,7 @@ from contactqp.model.chain import (
 from contactqp.model.condense import Condensed, condense, condensed_model
 
 __all__ = [
-    "Condensed", "ContactRows", "Layout", "Model", "bar_groups", "build_model", "condense",
+    "Condensed", "ContactRows", "Layout", "Model", "bar_groups", "bar_load_terms", "build_model", "condense",
     "condensed_model", "contact_forces_on_nodes", "count_up_to", "determinate_chain_solve",
     "displacement_scale", "displacement_scale_rule", "element_forces", "elongation_rows",
     "force_scale_rule", "in_set", "largest",
