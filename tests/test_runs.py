@@ -116,3 +116,21 @@ def test_runs_of_mostly_one_element_reduce_as_reduceat_does(ufunc):
     assert 0 < found.long.size and found.long.size * runs.LONG_RUNS <= found.starts.size
     values = np.random.default_rng(5).normal(0.0, 1e3, layout.elements[0].size)
     assert np.array_equal(found.reduce(ufunc, values), ufunc.reduceat(values, found.starts))
+
+
+@pytest.mark.parametrize("ufunc", [np.add, np.maximum, np.minimum])
+def test_runs_of_one_short_length_reduce_as_reduceat_does(ufunc):
+    # a batch of cases: the default scene side by side, each case's bar held at its support
+    # and at its wall, so that every run is the same four elements; signed zeros and NaN
+    # among the values, where the order of a maximum decides which comes out
+    prepared = contactqp.prepare(contactqp.default_scene())
+    layout = prepared.tiled(300).scene.layout
+    held = np.sort(np.concatenate((layout.node_offsets[:-1], layout.node_offsets[1:] - 1)))
+    found = runs.runs(layout, held)
+    assert found.length == 4 and found.starts.size == 300
+    values = -np.abs(np.random.default_rng(6).normal(0.0, 1e3, layout.elements[0].size))
+    values[1::8], values[2::8], values[6::12] = 0.0, -0.0, np.nan  # ties at 0: the order
+    assert np.array_equal(found.reduce(ufunc, values), ufunc.reduceat(values, found.starts),
+                          equal_nan=True)
+    mixed = runs.runs(layout, np.sort(np.append(held, layout.node_offsets[5] + 2)))
+    assert mixed.length == 0  # one case held in the middle too: the runs differ

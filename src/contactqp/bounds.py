@@ -60,7 +60,8 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     else:
         held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[pushing[rows]])
         s, s_ends = row_stiffness(layout, held, pushing, ends=True)
-    delta = np.abs(pen) if equality else np.where(pushing, np.abs(pen), np.maximum(pen, 0.0))
+    # in place where it can: each array over the rows is a fresh allocation (runs.propagate)
+    delta = np.abs(pen) if equality else np.abs(pen, out=np.maximum(pen, 0.0), where=pushing)
     moved = np.where(pushing, 0.0, lam)  # an open row's force (or a pull) becomes a load
     n_loads = external.size - row_nodes.size - layout.support_nodes.size
     # the contacts of the nearby scene carry only the rest
@@ -78,13 +79,16 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
                          np.where(s_ends > 0.0, s[rows] / s_ends, 1.0))
     end_moves = np.where(delta[rows] > 0.0, delta[rows] * np.minimum(share, 1.0), 0.0)
     gap_force, gap_move, moves = gap_moves(layout, held, row_nodes, end_moves, pushing)
+    # gap⁺ = max(−pen, 0), in delta's array (read no more)
+    standing = None if equality else np.maximum(np.negative(pen, out=delta), 0.0, out=delta)
+    del delta
     # ... and a held node that moves drags its run along: an open contact there whose gap is
     # smaller than that would close, and take what closing the rest of the move needs
     # (measured: quadprog left a wall 2.5e-12 m open beside one held 1.7e-11 m off, across
     # an element of 7e13 N/m, 963 N off and verified without this)
     closing = 0.0 if equality else _closing(layout, moves, row_nodes, rows,
-                                            np.where(pushing, np.inf, np.maximum(-pen, 0.0)),
-                                            held, s, pushing)
+                                            np.where(pushing, np.inf, standing), held, s,
+                                            pushing)
     force_bound = max(force_error, largest(moved)) + gap_force + pair + closing
     # a pushing bar contact is held at both ends above, but the two ends move together: the
     # force error it carries moves them by that force over the stiffness both bars give them
@@ -112,12 +116,15 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
         displacement_bound += _release(layout, held, pushing, lam, force_bound)
     if unpinned_bar(layout, pushing) is not None:  # the answer leaves a bar free to move
         displacement_bound = np.inf
-    feasibility = largest((np.abs(pen) if equality else np.maximum(pen, 0.0)) * s) / F
+    past = np.abs(pen) if equality else np.maximum(pen, 0.0)
+    feasibility = largest(np.multiply(past, s, out=past)) / F
+    del past
     residuals: dict[str, float | None] = {"equilibrium": r_max / F, "feasibility": feasibility}
     if equality:
         residuals.update(complementarity=None, sign=None)
-    else:
-        natural = np.minimum(np.maximum(lam, 0.0), np.maximum(-pen, 0.0) * s)
+    else:  # min(λ⁺, gap⁺·s), in gap⁺'s own array
+        natural = np.minimum(np.maximum(lam, 0.0), np.multiply(standing, s, out=standing),
+                             out=standing)
         residuals["complementarity"] = max(largest(natural), pair) / F
         residuals["sign"] = float(np.max(-lam, initial=0.0)) / F
     residuals["force"] = force_bound / F
@@ -240,7 +247,12 @@ def gap_moves(layout: Layout, held: np.ndarray, nodes: np.ndarray, delta: np.nda
         by_node = np.bincount(members, by_node, minlength=moving.size)[members]
     shifted_left = np.concatenate(([0.0], by_node[:-1]))
     shifted_right = np.append(by_node[1:], 0.0)
-    change = (by_node * (to_left + to_right) + shifted_left * to_left + shifted_right * to_right)
+    # by_node·(1/c_l + 1/c_r) + left neighbour's move/c_l + right's/c_r, in two arrays
+    change = np.add(to_left, to_right)
+    change *= by_node
+    term = np.multiply(shifted_left, to_left, out=shifted_left)
+    change += term
+    change += np.multiply(shifted_right, to_right, out=term)
     return largest(change), largest(by_node), (moving, by_node)
 
 

@@ -136,10 +136,12 @@ def external_forces(layout: Layout, contact_force: np.ndarray,
 
 def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reactions: np.ndarray,
           contact: str, tolerances: Tolerances = TOLERANCES,
-          element_force: np.ndarray | None = None, natural: bool = True) -> Check:
+          element_force: np.ndarray | None = None, natural: bool = True,
+          link_force: np.ndarray | None = None) -> Check:
     """Check displacements (every node) and forces against a model (or a scene, whose model is
     built), independently of how they were found. ``contact`` is "inequality" or "equality".
-    ``element_force``: the element forces k_e·(u_(e+1) − u_e) when the caller has them.
+    ``element_force``: the element forces k_e·(u_(e+1) − u_e) when the caller has them (and
+    ``link_force``, the same on the links between nodes, 0 between bars).
 
     Parameters
     ----------
@@ -160,6 +162,9 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
     natural : bool
         Whether to work out the natural-map residual (not part of ``verified``); False
         leaves it NaN (a batch works it out case by case).
+    link_force : array_like, optional
+        The element forces on the links between nodes (0 between bars), when the caller has
+        them (:func:`contactqp.model.link_forces` of ``element_force``).
 
     Returns
     -------
@@ -184,7 +189,7 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
     _shape("reactions", reactions, len(layout.scene.supports))
     F, U = model.force_scale, model.displacement_scale
     forces = element_forces(layout, u) if element_force is None else element_force
-    links = link_forces(layout, forces)
+    links = link_forces(layout, forces) if link_force is None else link_force
     nodes, external, _ = external_forces(layout, lam, reactions)
     u_size = largest(u)  # ‖u‖∞, inf where u has a NaN or an infinite value; read again below
     finite = math.isfinite(u_size) and all(np.isfinite(a).all() for a in (lam, reactions))
@@ -230,10 +235,12 @@ def natural_map(forces: np.ndarray, gaps: np.ndarray, free: np.ndarray,
 def _natural_top(forces: np.ndarray, gaps: np.ndarray, roots: np.ndarray | None
                  ) -> np.ndarray:
     """‖min(z, w)‖∞ of :func:`natural_map`, each row scaled by ``roots`` (if given)."""
-    if roots is not None:  # λ = D z and D w, D = diag(W)^-½ = 1/roots
+    scaled = roots is not None
+    if scaled:  # λ = D z and D w, D = diag(W)^-½ = 1/roots
         forces, gaps = forces * roots, gaps / roots
-    with np.errstate(invalid="ignore"):
-        return np.nanmax(np.abs(np.minimum(forces, gaps)), axis=-1, initial=0.0)
+    with np.errstate(invalid="ignore"):  # in the scaled forces' array when there is one
+        top = np.minimum(forces, gaps, out=forces if scaled else None)
+        return np.nanmax(np.abs(top, out=top), axis=-1, initial=0.0)
 
 
 def _natural_size(free: np.ndarray, roots: np.ndarray | None) -> np.ndarray:

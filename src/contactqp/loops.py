@@ -19,11 +19,12 @@ def opposed_forces(layout: Layout, lam: np.ndarray) -> float:
     position, the rows alone cannot tell how the force splits; the exact answer has one row of
     each loop free of it)."""
     force = np.maximum(lam, 0.0)
-    up_nodes, up_rows, down_nodes, down_rows = layout.opposed_entries
+    up_nodes, up_rows, down_nodes, down_rows = layout.opposed_entries  # places, not nodes
     common = 0.0
     if up_nodes.size:
-        plus = np.bincount(up_nodes, force[up_rows], minlength=layout.n_nodes)
-        minus = np.bincount(down_nodes, force[down_rows], minlength=layout.n_nodes)
+        size = int(up_nodes.max()) + 1  # every such node has entries both ways
+        plus = np.bincount(up_nodes, force[up_rows], minlength=size)
+        minus = np.bincount(down_nodes, force[down_rows], minlength=size)
         common = largest(np.minimum(plus, minus))
     # a loop whose gaps sum to zero (Layout.tight_cycles) is one of the loops that
     # round_the_loops finds: its weakest row carries at least that loop's smallest force

@@ -310,9 +310,10 @@ def checked(model: Model, solution: Solution, contact: str,
     forces = element_forces(layout, u)
     # reactions are what equilibrium at the supports needs (the force of the elements on each
     # side, less loads and contacts there); the check then tests every section of every bar
-    reactions = support_reactions(layout, link_forces(layout, forces), lam)
+    links = link_forces(layout, forces)
+    reactions = support_reactions(layout, links, lam)
     found = check(model, u, lam, reactions, contact, tolerances, element_force=forces,
-                  natural=natural)
+                  natural=natural, link_force=links)
     return Checked(u, lam, forces, reactions, penetration(layout, u), found)
 
 

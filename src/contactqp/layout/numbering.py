@@ -169,7 +169,8 @@ class Layout(SolvingArrays):
     def opposed_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The entries of C that act alone on a free node (a wall, or a bar contact with its
         other end at a support), at the nodes that have such entries pushing both ways: (nodes
-        and rows pushing in −x, nodes and rows pushing in +x)."""
+        and rows pushing in −x, nodes and rows pushing in +x), each node given by its place
+        among those nodes (so that a sum per node needs no array over the chain)."""
         rows, nodes, coefficients, gaps = self.rows
         free = ~self.support_mask[nodes]
         single = free & (np.bincount(rows[free], minlength=gaps.size)[rows] == 1)
@@ -179,8 +180,9 @@ class Layout(SolvingArrays):
         both &= np.bincount(nodes[down], minlength=self.n_nodes) > 0
         up &= both[nodes]
         down &= both[nodes]
-        return (_read_only(nodes[up]), _read_only(rows[up]), _read_only(nodes[down]),
-                _read_only(rows[down]))
+        place = np.cumsum(both) - 1  # each node's place among the nodes pushed both ways
+        return (_read_only(place[nodes[up]]), _read_only(rows[up]),
+                _read_only(place[nodes[down]]), _read_only(rows[down]))
 
     @cached_property
     def support_mask(self) -> np.ndarray:
