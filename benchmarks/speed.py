@@ -15,12 +15,16 @@
     solve_many 10⁴    10⁴ cases varying the load and the gap against a vectorised numpy version
                       (timed in turn with it, as the default scene)
 
-Every row gives the method's, the check's and the build's time apart (Result.timings).
-Warm rows drop each run's Result before the next, as the floor drops its arrays: on this
-machine a fresh page from the OS costs ~26 µs (a new 8 MB array 13 ms, against 0.4 ms for
-one reused), so holding every Result of a 10⁶-element run made its solve 97 ms instead of
-35-48 ms. The first-solve rows pay those pages, as a user's first solve does; the fresh
-process counts its page faults.
+Every row gives the method's, the check's and the build's time apart (Result.timings), and
+the page faults per call of the warm rows. Warm rows drop each run's Result before the next,
+as the floor drops its arrays: on this machine (a VM) the first touch of a page the OS hands
+out costs ~2 µs (10⁵ doubles written for the first time: 0.35-0.46 ms and 196 faults, against
+0.03 ms reused), so holding every Result of a 10⁶-element run made its solve 97 ms instead of
+35-48 ms. How many pages a call meets afresh also depends on what the process allocated
+before it (glibc returns the top of its heap to the OS past a threshold that grows with the
+largest block freed), so the same call took 0-4 000 faults from one process to the next; the
+fault count says how much of a row that is. The first-solve rows pay those pages, as a user's
+first solve does; the fresh process counts its page faults.
 Writes speed.json.
 """
 
@@ -29,6 +33,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -72,6 +77,8 @@ def _row(name: str, seconds: float, base: float, against: str, goal: float,
     if result is not None:
         row.update(_split(result))
         row["check_over_method"] = row["check"] / row["solve"]
+        if isinstance(result, _Timed) and not math.isnan(result.faults):
+            row["faults_per_call"] = result.faults
     return row
 
 
@@ -91,12 +98,19 @@ def _timed_solve(scene: contactqp.Scene, repeats: int, **options: object
         runs.append(_Timed(result.time, dict(result.timings), result.verified,
                            result.message))
 
+    faults = _faults()
     seconds = median_time(once, repeats)
+    faults = (_faults() - faults) / (repeats + 1)  # median_time calls once more to warm up
     if not last[0].verified:
         raise SystemExit(f"{scene.name}: not verified ({last[0].message})")
     # the split of the median run: the run whose total is the median
     middle = sorted(runs[1:], key=lambda r: r.time)[len(runs[1:]) // 2]
-    return seconds, middle
+    return seconds, _Timed(middle.time, middle.timings, middle.verified, middle.message, faults)
+
+
+def _faults() -> int:
+    """The page faults this process has met so far (minor: a page handed out, first touched)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt
 
 
 @dataclass(frozen=True)
@@ -107,6 +121,7 @@ class _Timed:
     timings: dict[str, float]
     verified: bool
     message: str
+    faults: float = math.nan  # page faults per call, over the timed runs
 
 
 def long_bar(quick: bool) -> list[dict]:
@@ -171,12 +186,13 @@ def default_loop(quick: bool) -> list[dict]:
     def solve_once() -> None:  # keeps the last Result only, as _timed_solve
         solved[:] = [contactqp.solve(scene)]
 
-    script, solve_seconds, solve_ratio = paired(hand_script, solve_once, repeats, alone)
+    script, solve_seconds, solve_ratio, solve_faults = paired(hand_script, solve_once,
+                                                              repeats, alone)
     prepared = contactqp.prepare(scene)
     one = np.array([1.1 * FORCE])
     one_case = prepared.solve(one)
-    _, prepared_seconds, prepared_ratio = paired(hand_script, lambda: prepared.solve(one),
-                                                 repeats, alone)
+    _, prepared_seconds, prepared_ratio, prepared_faults = paired(
+        hand_script, lambda: prepared.solve(one), repeats, alone)
     factors = np.linspace(0.5, 1.5, cases)
     loads, gaps = (FORCE * factors)[:, None], (GAP * factors[::-1])[:, None]
     exact = vectorised(loads[:, 0], gaps[:, 0])
@@ -184,7 +200,7 @@ def default_loop(quick: bool) -> list[dict]:
     if not (batch.verified.all() and np.allclose(batch.contact_force[:, 0], exact, rtol=1e-9,
                                                  atol=1e-9 * FORCE)):
         raise SystemExit("solve_many disagrees with the vectorised numpy version")
-    numpy_time, many_seconds, many_ratio = paired(
+    numpy_time, many_seconds, many_ratio, many_faults = paired(
         lambda: vectorised(loads[:, 0], gaps[:, 0]), lambda: prepared.solve_many(loads, gaps),
         3 if quick else 10)
     rows = [_row("seed numpy script", script, script, "", 1.0, one_thread=alone),
@@ -194,9 +210,11 @@ def default_loop(quick: bool) -> list[dict]:
             _row(f"vectorised numpy, {cases} cases", numpy_time, numpy_time, "", 1.0),
             _row(f"solve_many, {cases} cases (load and gap)", many_seconds, numpy_time,
                  "vectorised numpy", 10.0)]
-    for row, ratio in zip(rows[1:], (solve_ratio, prepared_ratio, None, many_ratio)):
+    for row, ratio, faults in zip(rows[1:], (solve_ratio, prepared_ratio, None, many_ratio),
+                                  (solve_faults, prepared_faults, None, many_faults)):
         if ratio is not None:
             row["ratio"] = ratio  # the median of the rounds' ratios
+            row["faults_per_call"] = faults
     return rows
 
 
@@ -204,21 +222,26 @@ ROUNDS = 9  # rounds of paired(), each timing the floor and the job
 
 
 def paired(floor_job: Callable[[], object], job: Callable[[], object], calls: int,
-           floor_limit: float = math.inf) -> tuple[float, float, float]:
+           floor_limit: float = math.inf) -> tuple[float, float, float, float]:
     """(the floor's median time, the job's median time, the median over ROUNDS rounds of the
-    job's time over the floor's), each round timing ``calls`` calls of the floor, then of the
-    job (both warmed first); a round's floor is at most ``floor_limit``."""
+    job's time over the floor's, the job's page faults per call), each round timing ``calls``
+    calls of the floor, then of the job (both warmed first); a round's floor is at most
+    ``floor_limit``."""
     floor_job(), job()
-    floors, times = [], []
+    floors, times, faults = [], [], 0
     for _ in range(ROUNDS):
         for target, into in ((floor_job, floors), (job, times)):
+            before = _faults()
             start = time.perf_counter()
             for _ in range(calls):
                 target()
             into.append((time.perf_counter() - start) / calls)
+            if target is job:
+                faults += _faults() - before
     floors = [min(f, floor_limit) for f in floors]
     ratios = [t / f for t, f in zip(times, floors)]
-    return statistics.median(floors), statistics.median(times), statistics.median(ratios)
+    return (statistics.median(floors), statistics.median(times), statistics.median(ratios),
+            faults / (ROUNDS * calls))
 
 
 SEED_SCRIPT = """
@@ -264,6 +287,8 @@ def main(quick: bool, out: Path) -> None:
               + (f"  import {1e3 * r['import']:.0f} ms, {r['page_faults']:.0f} page faults"
                  if "import" in r else "")
               + (f"  (one OpenBLAS thread: {1e6 * r['one_thread']:.0f} µs)"
-                 if "one_thread" in r else ""))
+                 if "one_thread" in r else "")
+              + (f"  {r['faults_per_call']:.0f} page faults a call"
+                 if "faults_per_call" in r else ""))
     out.mkdir(parents=True, exist_ok=True)
     (out / "speed.json").write_text(json.dumps({"machine": machine(), "rows": rows}, indent=1))
