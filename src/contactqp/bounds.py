@@ -52,13 +52,14 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     held nodes (:func:`propagate`); a held node moved by δ moves its runs by at most δ and
     changes the forces at itself and its held neighbours (:func:`gap_moves`)."""
     rows, row_nodes, _, _ = layout.rows
+    entry = layout.by_entry  # x[entry] is x[rows]
     pen = penetration(layout, u)
     equality = contact == "equality"
     pushing, chosen = _pushing(layout, lam, pen, hold * F, equality)
     if chosen is not None and np.array_equal(chosen[0], pushing):
         held, s, s_ends = chosen[1:]  # the same rows push: the same stiffnesses
     else:
-        held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[pushing[rows]])
+        held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[pushing[entry]])
         s, s_ends = row_stiffness(layout, held, pushing, ends=True)
     # in place where it can: each array over the rows is a fresh allocation (runs.propagate)
     delta = np.abs(pen) if equality else np.abs(pen, out=np.maximum(pen, 0.0), where=pushing)
@@ -66,9 +67,9 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     n_loads = external.size - row_nodes.size - layout.support_nodes.size
     # the contacts of the nearby scene carry only the rest
     contact_part = slice(n_loads, n_loads + row_nodes.size)
-    if np.any(external[contact_part][~pushing[rows]]):
+    if np.any(external[contact_part][~pushing[entry]]):
         kept_external = external.copy()
-        kept_external[contact_part][~pushing[rows]] = 0.0
+        kept_external[contact_part][~pushing[entry]] = 0.0
         outside = Running.of(layout.n_nodes, nodes, kept_external)
     force_error, sway = propagate(layout, held, links, outside)
     pair = 0.0 if equality else opposed_forces(layout, lam)
@@ -76,8 +77,8 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     # closing a bar contact's gap δ moves each end by its share, δ·s/s_end (a wall's node: δ)
     with np.errstate(invalid="ignore", divide="ignore"):
         share = np.where(np.isinf(s_ends), 0.0,  # a rigid end does not move
-                         np.where(s_ends > 0.0, s[rows] / s_ends, 1.0))
-    end_moves = np.where(delta[rows] > 0.0, delta[rows] * np.minimum(share, 1.0), 0.0)
+                         np.where(s_ends > 0.0, s[entry] / s_ends, 1.0))
+    end_moves = np.where(delta[entry] > 0.0, delta[entry] * np.minimum(share, 1.0), 0.0)
     gap_force, gap_move, moves = gap_moves(layout, held, row_nodes, end_moves, pushing)
     # gap⁺ = max(−pen, 0), in delta's array (read no more)
     standing = None if equality else np.maximum(np.negative(pen, out=delta), 0.0, out=delta)
@@ -139,12 +140,12 @@ def _pushing(layout: Layout, lam: np.ndarray, pen: np.ndarray, hold: float,
     more than ``hold`` held), so that closing the gap is the smaller move. Also (the rows
     taken as pushing for the stiffness, the held nodes, the row and end stiffnesses), for
     the caller to reuse when the same rows come out."""
-    rows, row_nodes, _, gaps = layout.rows
+    _, row_nodes, _, gaps = layout.rows
     if equality:
         return np.ones(gaps.size, dtype=bool), None
     wedged = _wedged(layout)  # walls that hold a bar in place with no force
     strong = (lam > hold) | wedged
-    held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[strong[rows]])
+    held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[strong[layout.by_entry]])
     s, s_ends = row_stiffness(layout, held, strong, ends=True)
     return (lam > np.maximum(-pen, 0.0) * s) | wedged, (strong, held, s, s_ends)
 
@@ -170,9 +171,9 @@ def _release(layout: Layout, held: np.ndarray, pushing: np.ndarray, lam: np.ndar
     unsure = pushing & (lam <= force_bound) & ~_wedged(layout)  # wedged: held whatever λ
     if not unsure.any():
         return 0.0
-    rows, row_nodes, _, _ = layout.rows
+    row_nodes = layout.rows.node
     sure = pushing & ~unsure
-    still = node_set(layout.n_nodes, layout.support_nodes, row_nodes[sure[rows]])
+    still = node_set(layout.n_nodes, layout.support_nodes, row_nodes[sure[layout.by_entry]])
     stiffness = row_stiffness(layout, still, sure)[unsure]
     with np.errstate(divide="ignore"):
         return float(np.max(force_bound / stiffness))

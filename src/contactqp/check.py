@@ -119,17 +119,12 @@ def external_forces(layout: Layout, contact_force: np.ndarray,
     """(global node, force in +x, N) of every force on the bars from outside: the loads (point
     loads, then the distributed loads' nodal forces), the contacts' −Cᵀλ and the supports'
     reactions, one entry each (a node may repeat); and how many entries are loads."""
-    rows, contact_nodes, values, _ = layout.rows
-    nodes = layout.load_nodes
-    loads = layout.scene.load_forces
-    if layout.scene.distributed:
-        spread = layout.distributed_nodal_loads
-        at = np.flatnonzero(spread)
-        nodes, loads = np.concatenate((nodes, at)), np.concatenate((loads, spread[at]))
+    rows, _, values, _ = layout.rows
+    loads = layout.load_entries[1]  # what depends on the loads alone: once per scene
     lam = np.asarray(contact_force, dtype=float).reshape(-1)
-    all_nodes = (np.concatenate((nodes, contact_nodes, layout.support_nodes)).astype(np.intp)
-                 if layout.scene.distributed else layout.outside_nodes)
-    forces = np.concatenate((loads, -values * lam[rows] if lam.size else np.zeros(rows.size),
+    all_nodes = layout.external_nodes
+    forces = np.concatenate((loads, -values * lam[layout.by_entry] if lam.size
+                             else np.zeros(rows.size),
                              np.asarray(reactions, dtype=float).reshape(-1)))
     return all_nodes, forces, int(loads.size)
 

@@ -317,6 +317,13 @@ class Layout(SolvingArrays):
             _read_only(_gaps(self.scene)))
 
     @property
+    def by_entry(self) -> np.ndarray | slice:
+        """The index that reads a value per row at each entry of :attr:`rows` (``x[by_entry]``
+        is ``x[rows.row]``): with no bar contact each wall is one entry, in row order, and
+        the index is a slice (a view, no copy over 10⁵ rows)."""
+        return self.rows.row if self.scene.contacts else slice(None)
+
+    @property
     def gaps(self) -> np.ndarray:
         """g: the gap of every contact row."""
         return self.rows.gap

@@ -106,6 +106,28 @@ class SolvingArrays:
                                           self.support_nodes)).astype(np.intp))
 
     @cached_property
+    def load_entries(self) -> tuple[np.ndarray, np.ndarray]:
+        """(node, force) of every load as the check lists them: the point loads, then the
+        distributed loads' nodal forces where they are not 0; once per scene, since they
+        depend on the loads alone."""
+        nodes, loads = self.load_nodes, self.scene.load_forces
+        if self.scene.distributed:
+            spread = self.distributed_nodal_loads
+            at = np.flatnonzero(spread)
+            nodes, loads = np.concatenate((nodes, at)), np.concatenate((loads, spread[at]))
+        return _read_only(nodes), _read_only(np.asarray(loads, dtype=float))
+
+    @cached_property
+    def external_nodes(self) -> np.ndarray:
+        """The node of every force from outside (:attr:`outside_nodes` with the distributed
+        loads' nodes after the point loads'), in the order of
+        :func:`contactqp.check.external_forces`."""
+        if not self.scene.distributed:
+            return self.outside_nodes
+        return _read_only(np.concatenate((self.load_entries[0], self.rows.node,
+                                          self.support_nodes)).astype(np.intp))
+
+    @cached_property
     def softest(self) -> float:
         """The smallest element stiffness (N/m): :attr:`contactqp.model.Model.force_scale`
         of a scene that nothing loads."""
