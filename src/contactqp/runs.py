@@ -23,17 +23,26 @@ from contactqp.model import Layout, count_up_to, largest
 LONG_RUNS = 64  # runs reduced one by one where at most one in this many is long
 SHORT_RUNS = 16  # runs of the same length up to this are reduced one element at a time
 KEPT_BYTES = 2**27  # what a layout keeps at most (128 MB; the oldest sets dropped first)
+FEW_HELD = 64  # held sets up to this size are found by their bytes (a small scene's check
+# asks for several kept sets, and summing and comparing cost 10-20 µs of its ~250)
 
 
 def kept(layout: Layout, kind: Any, held: np.ndarray, make: Callable[[], Any]) -> Any:
     """``make()`` for the ``held`` nodes (sorted) and ``kind`` (anything else it depends on),
-    or what it gave for the same before. Found by (kind, size, sum) and confirmed element by
-    element, so that a long held set is never hashed whole. What is kept is read-only."""
+    or what it gave for the same before. A few nodes are found by their bytes; more by (kind,
+    size, sum), confirmed element by element, so that a long held set is never hashed whole.
+    What is kept is read-only."""
     cache = layout.held_cache
-    key = (kind, held.size, int(held.sum()))
-    found = cache.get(key)
-    if found is not None and np.array_equal(found[0], held):
-        return found[1]
+    if held.size <= FEW_HELD:  # the nodes' bytes are the key: no sum, no confirming
+        key = (kind, held.dtype.str, held.tobytes())
+        found = cache.get(key)
+        if found is not None:
+            return found[1]
+    else:
+        key = (kind, held.size, int(held.sum()))
+        found = cache.get(key)
+        if found is not None and np.array_equal(found[0], held):
+            return found[1]
     value = make()
     size = held.nbytes + sum(a.nbytes for a in _arrays(value))
     while cache and sum(entry[2] for entry in cache.values()) + size > KEPT_BYTES:
@@ -67,7 +76,7 @@ class Runs:
     held_start: np.ndarray
     held_end: np.ndarray
     long: np.ndarray  # the runs of more than one element
-    length: int  # the length of every run, where all have the same length (else 0)
+    length: int  # the length of every run, where LONG_RUNS or more have one length (else 0)
 
     def reduce(self, ufunc: np.ufunc, values: np.ndarray) -> np.ndarray:
         """``ufunc.reduceat(values, starts)``: per run, over its elements. Where nearly every
@@ -110,7 +119,8 @@ def _runs(layout: Layout, held: np.ndarray) -> Runs:
     made = Runs(starts, ends, left_held, right_held, first, last,
                 np.add.reduceat(compliance, starts), run_of, layout.bar_ends[0][held],
                 layout.bar_ends[1][held], np.flatnonzero(lengths > 1),
-                int(lengths[0]) if np.all(lengths == lengths[0]) else 0)
+                int(lengths[0]) if starts.size >= LONG_RUNS and np.all(lengths == lengths[0])
+                else 0)
     for array in _arrays(made):
         array.flags.writeable = False
     return made
