@@ -32,8 +32,10 @@ from contactqp import (
     Support,
     Tolerances,
     Wall,
+    builders,
 )
 from contactqp.check import section_residual
+from contactqp.random_scenes import random_scene
 
 U_CONTACT = [0.0, 5e-5, 1.5e-4]  # m: 10 kN through k_0 = 2e8 N/m, then through k_1 = 1e8 N/m
 
@@ -242,3 +244,28 @@ def test_a_force_carried_round_a_loop_of_rows_is_not_verified():
     found = contactqp.check(scene, np.zeros(5), [F - c, c, c], np.zeros(2), "inequality")
     assert not found.verified
     assert found.force_error_bound >= c
+
+
+@pytest.mark.parametrize("builder", ["random", "flat_patch", "channel"])
+def test_the_check_writes_into_none_of_its_inputs(builder):
+    # the check works in place in its own arrays (every array over the chain costs pages);
+    # the answer it is given, read-only here, must come out as it went in, and the verdict
+    # be the same as for writable copies
+    if builder == "random":
+        scenes = [random_scene(np.random.default_rng(seed), contacts=bool(seed % 2))
+                  for seed in range(12)]
+    else:
+        scenes = [getattr(builders, builder)(300)]
+    for scene in scenes:
+        result = contactqp.solve(scene)
+        inputs = [np.array(result.u), np.array(result.contact_force),
+                  np.array(result.reactions)]
+        frozen = [a.copy() for a in inputs]
+        for a in frozen:
+            a.flags.writeable = False
+        found = contactqp.check(scene, *frozen, "inequality")
+        for before, after in zip(inputs, frozen):
+            np.testing.assert_array_equal(before, after)
+        again = contactqp.check(scene, *inputs, "inequality")
+        assert (found.verified, found.residuals) == (again.verified, again.residuals)
+        assert found.verified == result.verified
