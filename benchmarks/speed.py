@@ -84,11 +84,11 @@ def _row(name: str, seconds: float, base: float, against: str, goal: float,
 
 def _timed_solve(scene: contactqp.Scene, repeats: int, **options: object
                  ) -> tuple[float, _Timed]:
-    """The median time of ``solve(scene)`` and the Result of the median run. Each run's Result
-    is dropped before the next (its timings kept), as the floor drops its arrays: holding
-    every Result of 10⁶ nodes made each run's arrays fresh pages from the OS, and a fresh page
-    costs ~26 µs on this machine (one new 8 MB array: 13 ms, against 0.4 ms reused), which
-    doubled the 10⁶ figures (module docstring)."""
+    """The median time of ``solve(scene)``, the Result of the median run and the page faults
+    per call. Each run's Result is dropped before the next (its timings kept), as the floor
+    drops its arrays: holding every Result of 10⁶ nodes made each run's arrays fresh pages
+    from the OS, each ~2 µs on first touch on this machine, which doubled the 10⁶ figures
+    (module docstring)."""
     runs: list[_Timed] = []
     last: list[contactqp.Result] = []
 
