@@ -12,6 +12,7 @@ import pytest
 import contactqp
 from contactqp import bounds, runs
 from contactqp.builders import flat_patch
+from contactqp.model import segment_reduce
 from contactqp.random_scenes import random_scene
 
 RESULT_ARRAYS = ("u", "contact_force", "reactions", "penetration", "element_force", "stress")
@@ -134,3 +135,20 @@ def test_runs_of_one_short_length_reduce_as_reduceat_does(ufunc):
                           equal_nan=True)
     mixed = runs.runs(layout, np.sort(np.append(held, layout.node_offsets[5] + 2)))
     assert mixed.length == 0  # one case held in the middle too: the runs differ
+
+
+@pytest.mark.parametrize("ufunc", [np.add, np.maximum, np.minimum])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_segments_of_mostly_one_element_reduce_as_reduceat_does(ufunc, seed):
+    # the held nodes of a pressed patch: nearly every segment one element, a few long ones,
+    # some empty (two starts at one place), the last to the end
+    rng = np.random.default_rng(seed)
+    values = rng.normal(0.0, 1e3, 5000)
+    values[rng.integers(0, values.size, 50)] = np.nan
+    ones = np.delete(np.arange(0, 4000), rng.choice(np.arange(1, 4000), 30, replace=False))
+    starts = np.sort(np.concatenate((ones, rng.integers(0, 4000, 20))))  # 2- and 3-element too
+    found = segment_reduce(ufunc, values, starts)
+    assert np.array_equal(found, ufunc.reduceat(values, starts), equal_nan=True)
+    few = starts[::100]  # long segments on average: reduceat itself
+    assert np.array_equal(segment_reduce(ufunc, values, few), ufunc.reduceat(values, few),
+                          equal_nan=True)

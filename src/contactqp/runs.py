@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from contactqp.model import Layout, count_up_to, largest
+from contactqp.model import LONG_SEGMENTS, Layout, count_up_to, largest, segment_reduce
 
-LONG_RUNS = 64  # runs reduced one by one where at most one in this many is long
+LONG_RUNS = LONG_SEGMENTS  # runs reduced one by one where at most one in this many is long
 SHORT_RUNS = 16  # runs of the same length up to this are reduced one element at a time
 KEPT_BYTES = 2**27  # what a layout keeps at most (128 MB; the oldest sets dropped first)
 FEW_HELD = 64  # held sets up to this size are found by their bytes (a small scene's check
@@ -91,12 +91,7 @@ class Runs:
             for i in range(1, self.length):
                 ufunc(out, values[i:: self.length], out=out)
             return out
-        if self.long.size * LONG_RUNS > self.starts.size:
-            return ufunc.reduceat(values, self.starts)
-        out = values[self.starts]
-        for i in self.long.tolist():
-            out[i] = ufunc.reduceat(values[self.starts[i]: self.ends[i]], [0])[0]
-        return out
+        return segment_reduce(ufunc, values, self.starts, self.ends, self.long)
 
 
 def runs(layout: Layout, held: np.ndarray) -> Runs:

@@ -5,6 +5,7 @@ bar grouping).
 """
 
 from contactqp.layout.derived import (
+    LONG_SEGMENTS,
     bar_groups,
     bar_load_terms,
     contact_forces_on_nodes,
@@ -20,11 +21,12 @@ from contactqp.layout.derived import (
     run_ends,
     run_starts,
     seen_stiffness,
+    segment_reduce,
     spread,
 )
 from contactqp.layout.numbering import TOPOLOGY, ContactRows, Layout
 
-__all__ = ["TOPOLOGY", "ContactRows", "Layout", "bar_groups", "bar_load_terms", "contact_forces_on_nodes",
+__all__ = ["LONG_SEGMENTS", "TOPOLOGY", "ContactRows", "Layout", "bar_groups", "bar_load_terms", "contact_forces_on_nodes",
            "count_up_to", "element_forces", "in_set", "largest", "link_forces",
            "load_force_scale", "load_force_terms", "node_set", "penetration", "run_ends",
-           "run_starts", "seen_stiffness", "spread"]
+           "run_starts", "seen_stiffness", "segment_reduce", "spread"]

@@ -156,6 +156,31 @@ def seen_stiffness(layout: Layout, held: np.ndarray, nodes: np.ndarray) -> np.nd
                 + np.where(has_right, 1.0 / (phi[right] - own), 0.0))
 
 
+def segment_reduce(ufunc: np.ufunc, values: np.ndarray, starts: np.ndarray,
+                   ends: np.ndarray | None = None, long: np.ndarray | None = None
+                   ) -> np.ndarray:
+    """``ufunc.reduceat(values, starts)`` (``starts`` increasing, the last segment to the end;
+    ``ends`` and ``long``, the segments of more than one element, when the caller keeps
+    them): where nearly every segment is one element (the held nodes of a pressed patch),
+    those are the values themselves and only the long segments are reduced, each by the same
+    reduceat over its slice (reduceat costs a call per segment: 0.35 ms for 9.5·10⁴ of them).
+    The same numbers bit for bit."""
+    if long is None:
+        if LONG_SEGMENTS * starts.size < values.size:  # long on average: reduceat as it is
+            return ufunc.reduceat(values, starts)
+        ends = np.append(starts[1:], values.size)
+        long = np.flatnonzero(ends - starts > 1)
+    if long.size * LONG_SEGMENTS > starts.size:
+        return ufunc.reduceat(values, starts)
+    out = values[starts]
+    for i, a, b in zip(long.tolist(), starts[long].tolist(), ends[long].tolist()):
+        out[i] = ufunc.reduceat(values[a:b], [0])[0]
+    return out
+
+
+LONG_SEGMENTS = 64  # segments reduced one by one where at most one in this many is long
+
+
 def count_up_to(mask: np.ndarray) -> np.ndarray:
     """How many of ``mask`` are set at or before each position: a running count in 32-bit
     integers where it fits (numpy's running sum of booleans into 64 bits is 15× slower)."""
@@ -247,4 +272,5 @@ def bar_groups(scene: Scene, rows: np.ndarray) -> np.ndarray:
 __all__ = ["bar_groups", "bar_load_terms", "contact_forces_on_nodes", "count_up_to",
            "element_forces", "in_set", "largest", "link_forces", "load_force_scale",
            "load_force_terms", "node_set",
-           "penetration", "run_ends", "run_starts", "seen_stiffness", "spread", "wall_arrays"]
+           "penetration", "run_ends", "run_starts", "seen_stiffness", "segment_reduce", "spread",
+           "wall_arrays"]

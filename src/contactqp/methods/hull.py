@@ -39,7 +39,15 @@ import numpy as np
 from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
 from contactqp.methods.minorant import minorant_vertices
 from contactqp.methods.stretch import Stretch, displacements
-from contactqp.model import Condensed, Model, count_up_to, largest, run_ends, run_starts
+from contactqp.model import (
+    Condensed,
+    Model,
+    count_up_to,
+    largest,
+    run_ends,
+    run_starts,
+    segment_reduce,
+)
 from contactqp.result import Solution
 
 
@@ -121,8 +129,8 @@ class WallsOnChain:
         # Σ c_e N_e = u_b − u_a gives N_a; towards a free end N is the load beyond the cut.
         S = self.running_load
         c = self.link_compliance
-        sum_c = np.add.reduceat(c, nodes)[:-1]
-        sum_cS = np.add.reduceat(self.compliance_load, nodes)[:-1]
+        sum_c = segment_reduce(np.add, c, nodes)[:-1]
+        sum_cS = segment_reduce(np.add, self.compliance_load, nodes)[:-1]
         S_a, S_before_b = S[nodes[:-1]], S[nodes[1:] - 1]
         # N_a = (target_b − target_a + Σ c S − S_a Σ c) / Σ c, in place (no array per term)
         right = np.empty(nodes.size)

@@ -9,6 +9,7 @@
 """
 
 from contactqp.layout import (
+    LONG_SEGMENTS,
     ContactRows,
     Layout,
     bar_groups,
@@ -26,6 +27,7 @@ from contactqp.layout import (
     run_ends,
     run_starts,
     seen_stiffness,
+    segment_reduce,
     spread,
 )
 from contactqp.model.chain import (
@@ -43,10 +45,10 @@ from contactqp.model.chain import (
 from contactqp.model.condense import Condensed, condense, condensed_model
 
 __all__ = [
-    "Condensed", "ContactRows", "Layout", "Model", "bar_groups", "bar_load_terms", "build_model", "condense",
+    "LONG_SEGMENTS", "Condensed", "ContactRows", "Layout", "Model", "bar_groups", "bar_load_terms", "build_model", "condense",
     "condensed_model", "contact_forces_on_nodes", "count_up_to", "determinate_chain_solve",
     "displacement_scale", "displacement_scale_rule", "element_forces", "elongation_rows",
     "force_scale_rule", "in_set", "largest",
     "link_forces", "load_force_scale", "load_force_terms", "node_set", "penetration", "run_ends", "run_starts",
-    "scene_model", "seen_stiffness", "spread", "wall_stiffness", "without_circulation",
+    "scene_model", "seen_stiffness", "segment_reduce", "spread", "wall_stiffness", "without_circulation",
 ]
