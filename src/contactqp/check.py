@@ -43,7 +43,7 @@ p_i = C_i u − g_i the penetration, gap_i = −p_i):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -112,6 +112,9 @@ class Check:
     displacement_error_bound: float  # m: every displacement within this of exact
     force_scale: float  # F (N)
     displacement_scale: float  # U (m)
+    # C u − g per row (m) as the residuals read it, for the caller that reports it too (None
+    # for an answer with a NaN or an infinite value)
+    penetration: np.ndarray | None = field(default=None, repr=False, compare=False)
 
 
 def external_forces(layout: Layout, contact_force: np.ndarray,
@@ -213,7 +216,8 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
         notes.append(f"non-physical: a wall pulls the bar ({_pulling(layout, lam)}); a rigid "
                      "wall can only push")
     return Check(residuals, not failures, physical, "; ".join(notes),
-                 bounds.force_error_bound, bounds.displacement_error_bound, F, U)
+                 bounds.force_error_bound, bounds.displacement_error_bound, F, U,
+                 bounds.penetration)
 
 
 def natural_map(forces: np.ndarray, gaps: np.ndarray, free: np.ndarray,

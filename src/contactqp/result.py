@@ -314,7 +314,8 @@ def checked(model: Model, solution: Solution, contact: str,
     reactions = support_reactions(layout, links, lam)
     found = check(model, u, lam, reactions, contact, tolerances, element_force=forces,
                   natural=natural, link_force=links)
-    return Checked(u, lam, forces, reactions, penetration(layout, u), found)
+    pen = penetration(layout, u) if found.penetration is None else found.penetration
+    return Checked(u, lam, forces, reactions, pen, found)
 
 
 def make_result(model: Model, solution: Solution, *, method: str, contact: str,
