@@ -294,3 +294,18 @@ def test_a_set_that_settles_with_a_wall_passed_hands_over_to_lemke():
     assert "still passed" in result.info["active_set"] and result.verified
     exact = reference(scene)
     assert np.abs(result.contact_force - exact.contact_force).max() <= 1e-9 * result.force_scale
+
+
+def test_every_stage_the_active_set_went_through_is_named():
+    # a one-sided obstacle with walls touching at zero force (hypothesis, a fresh draw of
+    # test_hull's random obstacles): the hull's set came back, the passed loop settled with a
+    # wall still passed, and Lemke's method finished; the info said "passed, then Lemke's
+    # method", leaving out the hull. Which stages run rests on round-off where walls touch,
+    # so what is asserted is that a history starts where the method started
+    scene = contactqp.load_scene(SCENE_FILES / "hull_then_passed_then_lemke.toml")
+    result = contactqp.solve(scene, "lagrange", formulation="full")
+    history = result.info.get("active_set", "hull")
+    assert history.startswith("hull"), history
+    assert result.verified, result.message
+    exact = reference(scene)
+    assert np.abs(result.contact_force - exact.contact_force).max() <= 1e-9 * result.force_scale

@@ -178,14 +178,15 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
         kept = active & (lam > -force_tol)
         return independent_rows(C, kept, np.flatnonzero(~active & (pen > disp_tol)), pen, lam)
 
-    start, info = None, _strain_info(element_force)
+    start, info, loop = None, _strain_info(element_force), "passed"
     found = (hull.solve_on_chain(model, contact, max_iterations)
              if active_set == "hull" and formulation == "full" else None)
     if found is not None:
         solution, start = found
         if solution is not None:
             return solution
-        info = {"active_set": "hull, then passed (the hull's set came back)"}
+        loop = "hull, then passed"
+        info = {"active_set": f"{loop} (the hull's set came back)"}
     reason = None
     lemke_fits = (model.n_contacts <= LEMKE_LIMIT and not model.floating
                   and model.n_free * model.n_contacts <= LEMKE_ENTRIES)
@@ -204,7 +205,7 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
     if reason is not None and lemke_fits:
         # Lemke's method on the same contact problem: finite, and it cannot cycle
         u, lam, iterations = _by_lemke(model)
-        info = {"active_set": f"passed, then Lemke's method ({reason})"}
+        info = {"active_set": f"{loop}, then Lemke's method ({reason})"}
         if formulation == "strain":  # the element forces from u, as the tie rows give them
             element_force[:] = [element_forces(model.layout, model.full_displacements(u))]
     return Solution(u, lam, solver="lagrange", iterations=iterations,
