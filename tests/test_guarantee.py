@@ -249,18 +249,19 @@ def test_an_open_contact_tied_across_a_stiff_element_sees_that_element():
 
 
 @pytest.mark.xfail(strict=False, reason="known gap in the check, found 2026-11-25 (closing "
-                   "note): a bar contact between two wall-held nodes that penetrates with no "
-                   "force is read as held in place, though closing it moves force round the "
-                   "loop of rows")
+                   "note): a bar contact between two wall-held nodes of bars no support holds "
+                   "penetrates with no force; moving those nodes moves their bars whole, so "
+                   "the gap moves see no force, though closing it moves force round the loop")
 def test_a_penetrating_contact_between_two_held_nodes_is_not_verified_wrong():
     # random_scene(seed 4246536, floating=0.6), a fresh draw of
     # test_bars_held_only_by_contact_are_within_their_bound: DAQP (through qpsolvers) leaves
     # the contact between bar 0's node 0 (held by wall 0) and bar 1's node 1 (held by wall 7)
     # 4.2e-7 m past with no force, and puts its 3 601 N on wall 7; the exact answer has the
     # contact carrying it and wall 7 open by 4.2e-7 m. The same u to 4e-7 of U, 4 % of F off
-    # in three forces, verified with a force bound of 0.12 N: both ends are held, so the
-    # check's gap moves take the penetration as moving neither. Not strict: another DAQP
-    # release may land on the exact answer, and this case then passes
+    # in three forces, verified with a force bound of 0.12 N: each end gives at its own
+    # stiffness (row_stiffness), but each is the one held node of a bar no support holds, so
+    # moving it moves the bar whole and the gap moves see no force change. Not strict:
+    # another DAQP release may land on the exact answer, and this case then passes
     pytest.importorskip("daqp", reason="the qpsolvers backend DAQP (pip install daqp)")
     scene = random_scene(np.random.default_rng(4246536), floating=0.6)
     result = solve_quietly(scene, "qp", {"backend": "qpsolvers", "solver": "daqp"}, "full")
