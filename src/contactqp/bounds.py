@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from contactqp.held import wedged_bars, wedged_rows
-from contactqp.loops import opposed_forces
+from contactqp.loops import opposed_forces, rerouted_forces
 from contactqp.model import (
     Layout,
     bar_groups,
@@ -90,7 +90,10 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     closing = 0.0 if equality else _closing(layout, moves, row_nodes, rows,
                                             np.where(pushing, np.inf, standing), held, s,
                                             pushing)
-    force_bound = max(force_error, largest(moved)) + gap_force + pair + closing
+    # ... and a contact past its gap with no force may take the force of a row that holds
+    # its end, round the loop of rows (contactqp.loops.rerouted_forces)
+    rerouted = 0.0 if equality else rerouted_forces(layout, lam, pen, pushing, u, U)
+    force_bound = max(force_error, largest(moved)) + gap_force + pair + closing + rerouted
     # a pushing bar contact is held at both ends above, but the two ends move together: the
     # force error it carries moves them by that force over the stiffness both bars give them
     # there, and its bars' forces and displacements by up to as much again (measured: without
@@ -106,7 +109,8 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     # the augmented method, a bar held by contact alone pressing on a free bar's node, 0.0096 N
     # off at the contact and 0.016 N left over along three elements, moved the pair 1.04e-9 m
     # against a bound of 6.2e-10 m from the contact's error alone)
-    carried = force_error + float(np.abs(moved).sum()) + gap_force + pair + closing + r_max
+    carried = (force_error + float(np.abs(moved).sum()) + gap_force + pair + closing + rerouted
+               + r_max)
     displacement_bound = coupled * (sway + gap_move) + carried * give
     force_bound *= coupled
     # and the answer itself is only stored to a few units of round-off: a force of 2e8 N from
