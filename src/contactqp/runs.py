@@ -18,7 +18,14 @@ from typing import Any
 
 import numpy as np
 
-from contactqp.model import LONG_SEGMENTS, Layout, count_up_to, largest, segment_reduce
+from contactqp.model import (
+    LONG_SEGMENTS,
+    Layout,
+    count_up_to,
+    largest,
+    node_set,
+    segment_reduce,
+)
 
 LONG_RUNS = LONG_SEGMENTS  # runs reduced one by one where at most one in this many is long
 SHORT_RUNS = 16  # runs of the same length up to this are reduced one element at a time
@@ -127,15 +134,9 @@ def _run_first_elements(layout: Layout, held: np.ndarray) -> np.ndarray:
     node. From the held nodes alone, with no pass over the chain when they are few."""
     n = layout.elements[0].size
     firsts = layout.element_position[layout.node_offsets[:-1]]
-    marks = layout.element_position[held]
-    if 8 * (marks.size + firsts.size) <= n:
-        starts = np.unique(np.concatenate(([0], firsts, marks)))
-        return starts[starts < n]
-    mask = np.zeros(n + 1, dtype=bool)
-    mask[0] = True
-    mask[firsts] = True
-    mask[marks] = True
-    return np.flatnonzero(mask[:n])
+    marks = layout.element_position[held]  # n for a node past the last element
+    starts = node_set(n + 1, [0], firsts, marks)
+    return starts[:-1] if starts[-1] == n else starts
 
 
 def count_at_or_before(n_nodes: int, held: np.ndarray, nodes: np.ndarray) -> np.ndarray:

@@ -124,8 +124,8 @@ class SolvingArrays:
         :func:`contactqp.check.external_forces`."""
         if not self.scene.distributed:
             return self.outside_nodes
-        return _read_only(np.concatenate((self.load_entries[0], self.rows.node,
-                                          self.support_nodes)).astype(np.intp))
+        rows_and_supports = self.outside_nodes[self.load_nodes.size:]
+        return _read_only(np.concatenate((self.load_entries[0], rows_and_supports)))
 
     @cached_property
     def softest(self) -> float:
