@@ -117,3 +117,17 @@ def test_press_fits_that_need_small_pivots_end_in_the_exact_answer():
     error = np.abs(result.contact_force - exact.contact_force).max()
     assert error <= 1e-9 * np.abs(exact.contact_force).max()
     assert error <= result.force_error_bound
+
+
+def test_a_small_force_beside_a_large_one_is_not_left_out():
+    # random_scene(877, max_bars=1, contrast=False), a fresh draw of test_complementarity's
+    # exactness test: the exact answer has 0.35 N on one wall beside 6.3e6 N on another. At
+    # the pivot tolerance 1e-9 Lemke skipped the pivot that loads it, left its gap passed by
+    # 2.3e-10 of q (accepted under the old 1e-8), and was 0.35 N off; the answer is now tried
+    # at the next tolerances until a gap is passed by no more than round-off
+    scene = random_scene(np.random.default_rng(877), max_bars=1, contrast=False)
+    exact = reference(scene)
+    result = contactqp.solve(scene, "lemke")
+    largest = np.abs(exact.contact_force).max()
+    assert np.abs(result.contact_force - exact.contact_force).max() <= 1e-9 * largest
+    assert result.verified
