@@ -26,10 +26,13 @@ from contactqp.model import (
     node_set,
     segment_reduce,
 )
+from contactqp.sway import telescoped
 
 LONG_RUNS = LONG_SEGMENTS  # runs reduced one by one where at most one in this many is long
 SHORT_RUNS = 16  # runs of the same length up to this are reduced one element at a time
 KEPT_BYTES = 2**27  # what a layout keeps at most (128 MB; the oldest sets dropped first)
+FEW_SWAYING = 16  # propagate goes run by run where at most this many runs can sway (or 1 in
+# LONG_RUNS): a run of one element held at both ends moves no node
 FEW_HELD = 64  # held sets up to this size are found by their bytes (a small scene's check
 # asks for several kept sets, and summing and comparing cost 10-20 µs of its ~250)
 
@@ -83,6 +86,7 @@ class Runs:
     held_start: np.ndarray
     held_end: np.ndarray
     long: np.ndarray  # the runs of more than one element
+    swaying: np.ndarray  # the runs whose inner nodes can move: long, or held at one end only
     length: int  # the length of every run, where LONG_RUNS or more have one length (else 0)
 
     def reduce(self, ufunc: np.ufunc, values: np.ndarray) -> np.ndarray:
@@ -121,6 +125,7 @@ def _runs(layout: Layout, held: np.ndarray) -> Runs:
     made = Runs(starts, ends, left_held, right_held, first, last,
                 np.add.reduceat(compliance, starts), run_of, layout.bar_ends[0][held],
                 layout.bar_ends[1][held], np.flatnonzero(lengths > 1),
+                np.flatnonzero((lengths > 1) | ~(left_held & right_held)),
                 int(lengths[0]) if starts.size >= LONG_RUNS and np.all(lengths == lengths[0])
                 else 0)
     for array in _arrays(made):
@@ -178,20 +183,22 @@ class Running:
         step = np.searchsorted(self.steps, nodes, side="right") - 1
         return np.where(step >= 0, self.levels[np.maximum(step, 0)], 0.0)
 
-    def plus(self, links: np.ndarray) -> np.ndarray:
-        """links_j + E_j for every link j (a new array)."""
+    def plus(self, links: np.ndarray, lo: int = 0, hi: int | None = None) -> np.ndarray:
+        """links_j + E_j for the links j = lo … hi − 1 (every link by default; a new array)."""
+        hi = links.size if hi is None else hi
         if self.steps is None:
-            return links + self.levels[:-1]
-        total = np.empty_like(links)
-        bounds = np.concatenate(([0], np.minimum(self.steps, links.size), [links.size]))
+            return links[lo:hi] + self.levels[lo:hi]
+        total = np.empty(hi - lo)
+        bounds = np.concatenate(([lo], np.clip(self.steps, lo, hi), [hi]))
         levels = np.concatenate(([0.0], self.levels))
         for level, a, b in zip(levels.tolist(), bounds[:-1].tolist(), bounds[1:].tolist()):
-            np.add(links[a:b], level, out=total[a:b])
+            if a < b:
+                np.add(links[a:b], level, out=total[a - lo:b - lo])
         return total
 
 
 def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
-              outside: Running) -> tuple[float, float]:
+              outside: Running, u: np.ndarray | None = None) -> tuple[float, float]:
     """What the imbalance of an answer does with the ``held`` nodes (sorted) fixed: (the
     largest force error at a held node, N; the largest displacement error, m).
 
@@ -208,10 +215,12 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
         return 0.0, 0.0
     if held.size == 0:  # bars with no support, and nothing in the answer holds them
         return np.inf, np.inf
+    run = runs(layout, held)
+    if run.swaying.size <= max(FEW_SWAYING, run.starts.size // LONG_RUNS):
+        return _few_swaying(layout, held, links, outside, run, u)
     r = outside.plus(links)
     if element.size != r.size:  # junctions between bars: not every link is an element
         r = r[element]
-    run = runs(layout, held)
     c_run = _run_levels(r, compliance, outside, run)
     sway = _sway(r, compliance, c_run, run)  # r reused there
     del r
@@ -238,6 +247,53 @@ def _run_levels(r: np.ndarray, compliance: np.ndarray, outside: Running, run: Ru
     del before_bar
     np.copyto(c, after_bar, where=~(run.left_held & run.right_held))
     return c
+
+
+def _few_swaying(layout: Layout, held: np.ndarray, links: np.ndarray, outside: Running,
+                 run: Runs, u: np.ndarray | None) -> tuple[float, float]:
+    """:func:`propagate` where few runs can sway (a pressed patch: 9.5·10⁴ runs, one long;
+    one wall on a bar: one run), run by run over those alone. A run of one element held at
+    both ends has c = r there, the mean of one value, and moves no node: r at each run's
+    first element is every such c. Where few loads act on a run, it is read from u
+    (:func:`telescoped`), with no pass over r."""
+    element, compliance = layout.elements
+    first = element[run.starts]
+    c_run = np.add(links[first], outside.at(first))
+    sway = 0.0
+    for i, a, b in zip(run.swaying.tolist(), run.starts[run.swaying].tolist(),
+                       run.ends[run.swaying].tolist()):
+        lo, hi = int(element[a]), int(element[b - 1]) + 1
+        left = bool(run.left_held[i])
+        if left and run.right_held[i]:
+            c = None  # the weighted mean of r
+        elif left:  # past the bar's head
+            c = float(outside.at(int(run.last[i])))
+        else:  # before the bar's tail
+            c = float(outside.at(int(run.first[i]) - 1)) if run.first[i] > 0 else 0.0
+        found = (None if u is None or outside.steps is None or hi - lo != b - a
+                 else telescoped(layout.compliance, u, outside.steps, outside.levels, lo, hi,
+                                 c, left))
+        if found is None:
+            r = (outside.plus(links, lo, hi) if hi - lo == b - a  # one bar's links, in order
+                 else links[element[a:b]] + outside.at(element[a:b]))
+            if c is None:  # in one pass
+                c = float(np.dot(r, compliance[a:b])) / float(run.compliance[i])
+            found = c, _run_sway(r, compliance[a:b], c, left)
+        c_run[i] = found[0]
+        sway = max(sway, found[1])
+    return _held_jumps(held, c_run, outside, run), sway
+
+
+def _run_sway(r: np.ndarray, compliance: np.ndarray, c: float, left_held: bool) -> float:
+    """:func:`_sway` for one run (``r`` overwritten): the running sum of its elongation
+    errors from its start, the largest distance from the held end."""
+    elongation = np.subtract(c, r, out=r)
+    elongation *= compliance
+    total = np.cumsum(elongation, out=elongation)
+    top, bottom, tail = float(total.max()), float(total.min()), float(total[-1])
+    if left_held:
+        return max(abs(top), abs(bottom))
+    return max(abs(tail - top), abs(tail - bottom), abs(tail))
 
 
 def _held_jumps(held: np.ndarray, c_run: np.ndarray, outside: Running, run: Runs) -> float:
