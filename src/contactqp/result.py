@@ -40,6 +40,9 @@ class Solution:
     status: str = "solved"  # the solver's own claim, recorded, never trusted
     claimed_success: bool = True
     info: dict[str, Any] = field(default_factory=dict)
+    # every node's displacement, 0 at the supports, where the method has it over the whole
+    # chain (the hull): the Result takes it as it is instead of placing u_free again
+    u_nodes: np.ndarray | None = field(default=None, repr=False, compare=False)
 
 
 class Reported:
@@ -269,11 +272,17 @@ def yield_warning(layout: Layout, stress: np.ndarray) -> tuple[float | None, lis
     yield_stress = layout.yield_stress
     if yield_stress is None:
         return None, []
-    ratios = np.abs(stress)
-    ratio = float(np.fmax.reduce(np.divide(ratios, yield_stress, out=ratios)))
+    scene = layout.scene
+    one = {b.yield_stress for b in scene.bars}
+    if len(one) == 1 and stress.size:  # every bar the same: two reductions, no |σ| array
+        # (x/y is monotone in x, so the largest |σ| over y is the largest |σ|/y, bit for bit)
+        ratio = max(float(np.fmax.reduce(stress)), -float(np.fmin.reduce(stress))) / one.pop()
+    else:
+        ratios = np.abs(stress)
+        ratio = float(np.fmax.reduce(np.divide(ratios, yield_stress, out=ratios)))
     if not ratio > 1.0:
         return ratio, []
-    scene = layout.scene
+    ratios = np.abs(stress) / yield_stress
     e = int(np.flatnonzero(ratios == ratio)[0])  # nanargmax's element, without its NaN pass
     where = f"element {e}"
     if len(scene.bars) > 1:
@@ -305,7 +314,9 @@ def checked(model: Model, solution: Solution, contact: str,
     """Derive every quantity from u and λ of a solution, then check it (``natural``: with the
     natural-map residual, :func:`contactqp.check.check`)."""
     layout = model.layout
-    u = model.full_displacements(np.asarray(solution.u_free, dtype=float))
+    u = solution.u_nodes
+    if u is None or u.shape != (layout.n_nodes,):
+        u = model.full_displacements(np.asarray(solution.u_free, dtype=float))
     lam = np.asarray(solution.contact_force, dtype=float).reshape(-1)
     forces = element_forces(layout, u)
     # reactions are what equilibrium at the supports needs (the force of the elements on each

@@ -327,7 +327,7 @@ def solve_on_chain(model: Model | Condensed, contact: str, max_iterations: int |
     factor = model.load_factor if isinstance(model, Condensed) else 1.0
     solution, reached = solve_hull(chain, max_iterations=max_iterations, load_factor=factor)
     if solution is not None and chain is not model:  # the condensed unknowns: contact nodes' u
-        solution = replace(solution, u_free=solution.u_free[model.nodes])
+        solution = replace(solution, u_free=solution.u_free[model.nodes], u_nodes=None)
     return solution, reached
 
 
@@ -375,11 +375,14 @@ def _solution(chain: WallsOnChain, u: np.ndarray, nodes: np.ndarray, force: np.n
         mine = held[side][nodes]
         contact_force[chain.owner[side][nodes[mine]]] = force[mine]
     free = chain.model.free
+    u_nodes = None
     if free.size and free[-1] - free[0] + 1 == free.size:  # the free nodes are one range
-        u_free = u[free[0]: free[-1] + 1]
         if u is chain.u_free:  # no wall held: the Solution's own copy
-            u_free = u_free.copy()
+            u = u.copy()
+        u_free = u[free[0]: free[-1] + 1]
+        u[chain.model.layout.support_nodes] = 0.0  # outside that range: u as a Result has it
+        u_nodes = u
     else:
         u_free = u[free]
     return Solution(u_free, contact_force, solver="lagrange", iterations=steps,
-                    info={"active_set": "hull"})
+                    info={"active_set": "hull"}, u_nodes=u_nodes)
