@@ -4,6 +4,7 @@ not grow with the mesh."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -281,3 +282,42 @@ def test_auto_condenses_a_long_bar_with_few_contacts_and_nothing_else():
         assert "formulation" not in contactqp.solve(contactqp.default_scene(), method).options
     many = contactqp.solve(contactqp.obstacle(1000), "augmented")
     assert "formulation" not in many.options
+
+
+@pytest.mark.parametrize("seed", [21, 22, 23])
+def test_the_hull_hands_every_node_its_u_as_placing_u_free_would(seed, monkeypatch):
+    # the hull's Solution carries u over every node, which the Result takes as it is: it
+    # must be what placing u_free among the supports gives, bit for bit (+0.0 at a support),
+    # and the Result's own array, not one the next solve reuses
+    from contactqp import result as result_module
+
+    rng = np.random.default_rng(seed)
+    scenes = [random_scene(rng, max_elements=60) for _ in range(12)]
+    scenes.append(contactqp.default_scene())
+    taken = 0
+    real = result_module.checked
+
+    def placing(model, solution, *args, **kwargs):
+        return real(model, dataclasses.replace(solution, u_nodes=None), *args, **kwargs)
+
+    for scene in scenes:
+        first = contactqp.solve(scene, "lagrange")
+        if first.info.get("active_set") != "hull":
+            continue
+        model = first.model
+        placed = np.zeros(model.layout.n_nodes)
+        placed[model.free] = first.u[model.free]
+        assert np.array_equal(first.u, placed)
+        assert not np.signbit(first.u[model.layout.support_nodes]).any()
+        kept = first.u.copy()
+        first.u[:] = np.nan  # a user writing into one Result's u
+        again = contactqp.solve(scene, "lagrange")
+        assert np.array_equal(again.u, kept)
+        with monkeypatch.context() as patched:  # the Result without the hull's u
+            patched.setattr(result_module, "checked", placing)
+            placed_again = contactqp.solve(scene, "lagrange")
+        assert np.array_equal(placed_again.u, kept)
+        assert (placed_again.force_error_bound, placed_again.displacement_error_bound) == (
+            again.force_error_bound, again.displacement_error_bound)
+        taken += 1
+    assert taken >= 5
