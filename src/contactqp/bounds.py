@@ -40,10 +40,11 @@ class Bounds:
 def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarray,
                  nodes: np.ndarray, external: np.ndarray, r_max: float, contact: str,
                  F: float, U: float, hold: float, outside: Running,
-                 u_size: float | None = None) -> Bounds:
+                 u_size: float | None = None, links_size: float | None = None) -> Bounds:
     """The residuals and the error bounds of an answer (module docstring); a contact whose
     force passes ``hold`` × F counts as pushing when the held nodes are chosen. ``outside``:
-    the running sum of ``external`` over the nodes; ``u_size`` ‖u‖∞, when the caller has it.
+    the running sum of ``external`` over the nodes; ``u_size`` ‖u‖∞ and ``links_size``
+    ‖links‖∞, when the caller has them.
 
     The answer is exact for a nearby scene: the rows that push are held at where the answer
     puts them (their gaps moved by δ = |penetration|), the other rows' forces and every
@@ -115,7 +116,8 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     force_bound *= coupled
     # and the answer itself is only stored to a few units of round-off: a force of 2e8 N from
     # a press fit on a stiff element is one float step (3e-8 N) from any other
-    force_bound += ROUND_OFF * max(largest(lam), largest(links), F)
+    force_bound += ROUND_OFF * max(largest(lam), largest(links) if links_size is None
+                                   else links_size, F)
     displacement_bound += ROUND_OFF * max(largest(u) if u_size is None else u_size, U)
     if not equality:
         displacement_bound += _release(layout, held, pushing, lam, force_bound)

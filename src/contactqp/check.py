@@ -195,10 +195,10 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
         return _failed(contact, lam, F, U, tolerances)
     # E_j, the outside forces on nodes 0..j, once for both (at every node where they are many)
     outside = Running.of(layout.n_nodes, nodes, external)
-    r_max = section_residual(links, nodes, external,
-                             outside.levels if outside.steps is None else None)
+    r_max, links_size = section_residual_and_size(
+        links, nodes, external, outside.levels if outside.steps is None else None)
     bounds = error_bounds(layout, u, lam, links, nodes, external, r_max, contact, F, U,
-                          tolerances.complementarity, outside, u_size)
+                          tolerances.complementarity, outside, u_size, links_size)
     residuals = {name: value for name, value in bounds.residuals.items()}
     failures = [
         f"{name} residual {value:.2e} > {getattr(tolerances, name):.0e}"
@@ -305,24 +305,31 @@ def section_residual(forces: np.ndarray, nodes: np.ndarray, external: np.ndarray
     min (numpy reduceat), without an O(n) cumulative sum; with outside forces on more than
     an eighth of the nodes, one cumulative sum is cheaper than sorting them (``outside``:
     that sum, E_j for every node j, when the caller has it)."""
+    return section_residual_and_size(forces, nodes, external, outside)[0]
+
+
+def section_residual_and_size(forces: np.ndarray, nodes: np.ndarray, external: np.ndarray,
+                              outside: np.ndarray | None = None) -> tuple[float, float | None]:
+    """(:func:`section_residual`, ‖forces‖∞ where the runs' largest and smallest forces give
+    it, else None): the check reads both, and the forces once."""
     if outside is not None or 8 * nodes.size > forces.size:
         if outside is None:
             outside = np.cumsum(np.bincount(nodes, external, minlength=forces.size + 1))
-        return max(largest(forces + outside[:-1]), abs(float(outside[-1])))
+        return max(largest(forces + outside[:-1]), abs(float(outside[-1]))), None
     order = np.argsort(nodes, kind="stable")
     steps, first = np.unique(nodes[order], return_index=True)
     totals = np.cumsum(external[order])[np.append(first[1:], order.size) - 1]  # E after a step
     balance = abs(float(totals[-1])) if totals.size else 0.0
     if forces.size == 0:
-        return balance
+        return balance, 0.0
     # runs of elements [start, next start) with E constant; before the first step E = 0
     starts = np.unique(np.concatenate(([0], steps[steps < forces.size])))
     level = np.zeros(starts.size)
     level_at = np.searchsorted(steps, starts, side="right") - 1
     level[level_at >= 0] = totals[level_at[level_at >= 0]]
-    top = np.maximum.reduceat(forces, starts) + level
-    bottom = np.minimum.reduceat(forces, starts) + level
-    return max(largest(top), largest(bottom), balance)
+    top, bottom = np.maximum.reduceat(forces, starts), np.minimum.reduceat(forces, starts)
+    size = max(largest(top), largest(bottom))  # ‖forces‖∞
+    return max(largest(top + level), largest(bottom + level), balance), size
 
 
 LISTED_PULLS = 5  # a message names the rows that pull hardest, not every one (10⁴ made 224 kB)
