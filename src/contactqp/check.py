@@ -231,12 +231,13 @@ def natural_map(forces: np.ndarray, gaps: np.ndarray, free: np.ndarray,
     return _natural_top(forces, gaps, roots) / _natural_size(free, roots)
 
 
-def _natural_top(forces: np.ndarray, gaps: np.ndarray, roots: np.ndarray | None
-                 ) -> np.ndarray:
-    """‖min(z, w)‖∞ of :func:`natural_map`, each row scaled by ``roots`` (if given)."""
+def _natural_top(forces: np.ndarray, gaps: np.ndarray, roots: np.ndarray | None,
+                 own_gaps: bool = False) -> np.ndarray:
+    """‖min(z, w)‖∞ of :func:`natural_map`, each row scaled by ``roots`` (if given);
+    ``own_gaps``: ``gaps`` is the caller's scratch, scaled in place."""
     scaled = roots is not None
     if scaled:  # λ = D z and D w, D = diag(W)^-½ = 1/roots
-        forces, gaps = forces * roots, gaps / roots
+        forces, gaps = forces * roots, np.divide(gaps, roots, out=gaps if own_gaps else None)
     with np.errstate(invalid="ignore"):  # in the scaled forces' array when there is one
         top = np.minimum(forces, gaps, out=forces if scaled else None)
         return np.nanmax(np.abs(top, out=top), axis=-1, initial=0.0)
@@ -259,7 +260,7 @@ def _natural_residual(model: Model, lam: np.ndarray, pen: np.ndarray) -> float:
         roots = row_compliance_roots(model.layout)
         kept = model.__dict__["natural_scale"] = (roots, _natural_size(free_gaps(model), roots))
     roots, size = kept
-    return float(_natural_top(lam, -pen, roots) / size)
+    return float(_natural_top(lam, np.negative(pen), roots, own_gaps=True) / size)
 
 
 def free_gaps(model: Model) -> np.ndarray:

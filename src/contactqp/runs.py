@@ -85,6 +85,9 @@ class Runs:
     run_of: np.ndarray
     held_start: np.ndarray
     held_end: np.ndarray
+    at_first: np.ndarray  # the held nodes (places in held) that are their bar's first node
+    at_last: np.ndarray  # ... and its last node
+    first_links: np.ndarray  # each run's first element as a link (Layout.elements[0])
     long: np.ndarray  # the runs of more than one element
     swaying: np.ndarray  # the runs whose inner nodes can move: long, or held at one end only
     length: int  # the length of every run, where LONG_RUNS or more have one length (else 0)
@@ -122,9 +125,11 @@ def _runs(layout: Layout, held: np.ndarray) -> Runs:
     at = layout.element_position[np.concatenate((held - 1, held)).clip(0, element[-1])]
     run_of = count_at_or_before(element.size, starts, np.minimum(at, element.size - 1)) - 1
     lengths = ends - starts
+    held_start, held_end = layout.bar_ends[0][held], layout.bar_ends[1][held]
     made = Runs(starts, ends, left_held, right_held, first, last,
-                np.add.reduceat(compliance, starts), run_of, layout.bar_ends[0][held],
-                layout.bar_ends[1][held], np.flatnonzero(lengths > 1),
+                np.add.reduceat(compliance, starts), run_of, held_start, held_end,
+                np.flatnonzero(held <= held_start), np.flatnonzero(held >= held_end),
+                element[starts], np.flatnonzero(lengths > 1),
                 np.flatnonzero((lengths > 1) | ~(left_held & right_held)),
                 int(lengths[0]) if starts.size >= LONG_RUNS and np.all(lengths == lengths[0])
                 else 0)
@@ -257,7 +262,7 @@ def _few_swaying(layout: Layout, held: np.ndarray, links: np.ndarray, outside: R
     first element is every such c. Where few loads act on a run, it is read from u
     (:func:`telescoped`), with no pass over r."""
     element, compliance = layout.elements
-    first = element[run.starts]
+    first = run.first_links
     c_run = np.add(links[first], outside.at(first))
     sway = 0.0
     for i, a, b in zip(run.swaying.tolist(), run.starts[run.swaying].tolist(),
@@ -299,14 +304,12 @@ def _run_sway(r: np.ndarray, compliance: np.ndarray, c: float, left_held: bool) 
 def _held_jumps(held: np.ndarray, c_run: np.ndarray, outside: Running, run: Runs) -> float:
     """The largest force error at a held node (:func:`propagate`): the jump of c between the
     elements on either side of it (past a bar's end, the cut residual there)."""
-    start, end = run.held_start, run.held_end
-    c_at = c_run[run.run_of]
-    c_left = outside.at(np.maximum(start - 1, 0))
-    c_left[start <= 0] = 0.0
-    np.copyto(c_left, c_at[: held.size], where=held > start)
-    c_right = outside.at(end)
-    np.copyto(c_right, c_at[held.size:], where=held < end)
-    del c_at
+    c_left, c_right = c_run[run.run_of[: held.size]], c_run[run.run_of[held.size:]]
+    if run.at_first.size:  # no run before a bar's first node: the cut residual before it
+        start = run.held_start[run.at_first]
+        c_left[run.at_first] = np.where(start > 0, outside.at(np.maximum(start - 1, 0)), 0.0)
+    if run.at_last.size:  # ... and past its last
+        c_right[run.at_last] = outside.at(run.held_end[run.at_last])
     return largest(np.subtract(c_left, c_right, out=c_left))
 
 
