@@ -16,15 +16,15 @@
                       (timed in turn with it, as the default scene)
 
 Every row gives the method's, the check's and the build's time apart (Result.timings), and
-the page faults per call of the warm rows. Warm rows drop each run's Result before the next,
-as the floor drops its arrays: on this machine (a VM) the first touch of a page the OS hands
-out costs ~2 µs (10⁵ doubles written for the first time: 0.35-0.46 ms and 196 faults, against
-0.03 ms reused), so holding every Result of a 10⁶-element run made its solve 97 ms instead of
-35-48 ms. How many pages a call meets afresh also depends on what the process allocated
-before it (glibc returns the top of its heap to the OS past a threshold that grows with the
-largest block freed), so the same call took 0-4 000 faults from one process to the next; the
-fault count says how much of a row that is. The first-solve rows pay those pages, as a user's
-first solve does; the fresh process counts its page faults.
+the page faults per call of the warm rows. Warm rows keep each run's Result only until the
+next run's is made, as a user's loop does: on this machine (a VM) the first touch of a page
+the OS hands out costs ~2 µs (10⁵ doubles written for the first time: 0.35-0.46 ms and 196
+faults, against 0.03 ms reused), so holding every Result of a 10⁶-element run made its solve
+97 ms instead of 35-48 ms. How many pages a call meets afresh also depends on what the
+process allocated before it (glibc returns the top of its heap to the OS past a threshold
+that grows with the largest block freed), so the same call took 0-4 000 faults from one
+process to the next; the fault count says how much of a row that is. The first-solve rows
+pay those pages, as a user's first solve does; the fresh process counts its page faults.
 Writes speed.json.
 """
 
@@ -85,10 +85,10 @@ def _row(name: str, seconds: float, base: float, against: str, goal: float,
 def _timed_solve(scene: contactqp.Scene, repeats: int, **options: object
                  ) -> tuple[float, _Timed]:
     """The median time of ``solve(scene)``, the Result of the median run and the page faults
-    per call. Each run's Result is dropped before the next (its timings kept), as the floor
-    drops its arrays: holding every Result of 10⁶ nodes made each run's arrays fresh pages
-    from the OS, each ~2 µs on first touch on this machine, which doubled the 10⁶ figures
-    (module docstring)."""
+    per call. Each run's Result is kept only until the next run's is made (its timings kept),
+    as ``result = solve(...)`` in a user's loop keeps it: holding every Result of 10⁶ nodes
+    made each run's arrays fresh pages from the OS, each ~2 µs on first touch on this
+    machine, which doubled the 10⁶ figures (module docstring)."""
     runs: list[_Timed] = []
     last: list[contactqp.Result] = []
 
