@@ -31,8 +31,9 @@ from contactqp.sway import telescoped
 LONG_RUNS = LONG_SEGMENTS  # runs reduced one by one where at most one in this many is long
 SHORT_RUNS = 16  # runs of the same length up to this are reduced one element at a time
 KEPT_BYTES = 2**27  # what a layout keeps at most (128 MB; the oldest sets dropped first)
-FEW_SWAYING = 16  # propagate goes run by run where at most this many runs can sway (or 1 in
-# LONG_RUNS): a run of one element held at both ends moves no node
+# propagate goes run by run where at most this many runs can sway (or one in LONG_RUNS): a
+# run of one element held at both ends moves no node
+FEW_SWAYING = 16
 FEW_HELD = 64  # held sets up to this size are found by their bytes (a small scene's check
 # asks for several kept sets, and summing and comparing cost 10-20 µs of its ~250)
 
@@ -267,6 +268,8 @@ def _few_swaying(layout: Layout, held: np.ndarray, links: np.ndarray, outside: R
     sway = 0.0
     for i, a, b in zip(run.swaying.tolist(), run.starts[run.swaying].tolist(),
                        run.ends[run.swaying].tolist()):
+        # a run lies in one bar (runs start at every bar's first element): its elements are
+        # the links lo … hi − 1, in order
         lo, hi = int(element[a]), int(element[b - 1]) + 1
         left = bool(run.left_held[i])
         if left and run.right_held[i]:
@@ -275,12 +278,13 @@ def _few_swaying(layout: Layout, held: np.ndarray, links: np.ndarray, outside: R
             c = float(outside.at(int(run.last[i])))
         else:  # before the bar's tail
             c = float(outside.at(int(run.first[i]) - 1)) if run.first[i] > 0 else 0.0
-        found = (None if u is None or outside.steps is None or hi - lo != b - a
-                 else telescoped(layout.compliance, u, outside.steps, outside.levels, lo, hi,
-                                 c, left))
+        found = None
+        if u is not None and outside.steps is not None:
+            found = telescoped(layout.compliance, compliance, u, outside.steps, outside.levels,
+                               (lo, hi, a, int(run.first[i]), float(run.compliance[i])), c,
+                               left)
         if found is None:
-            r = (outside.plus(links, lo, hi) if hi - lo == b - a  # one bar's links, in order
-                 else links[element[a:b]] + outside.at(element[a:b]))
+            r = outside.plus(links, lo, hi)
             if c is None:  # in one pass
                 c = float(np.dot(r, compliance[a:b])) / float(run.compliance[i])
             found = c, _run_sway(r, compliance[a:b], c, left)
