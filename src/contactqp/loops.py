@@ -36,6 +36,8 @@ def _per_place(places: np.ndarray, forces: np.ndarray, size: int) -> np.ndarray:
     """np.bincount(places, forces, minlength=size): placed where each place has one entry (a
     channel: one wall each side of every node; bincount took 0.7 ms for 5·10⁴), 0.0 + f as
     bincount adds it (no −0.0), the same numbers bit for bit."""
+    # every place has an entry (Layout.opposed_entries keeps only nodes pushed both ways), so
+    # as many entries as places means one each
     if places.size != size:  # a place with several entries: their sum
         return np.bincount(places, forces, minlength=size)
     total = np.zeros(size)

@@ -273,10 +273,10 @@ def yield_warning(layout: Layout, stress: np.ndarray) -> tuple[float | None, lis
     if yield_stress is None:
         return None, []
     scene = layout.scene
-    one = {b.yield_stress for b in scene.bars}
-    if len(one) == 1 and stress.size:  # every bar the same: two reductions, no |σ| array
+    yields = {b.yield_stress for b in scene.bars}
+    if len(yields) == 1 and stress.size:  # every bar the same: two reductions, no |σ| array
         # (x/y is monotone in x, so the largest |σ| over y is the largest |σ|/y, bit for bit)
-        ratio = max(float(np.fmax.reduce(stress)), -float(np.fmin.reduce(stress))) / one.pop()
+        ratio = max(float(np.fmax.reduce(stress)), -float(np.fmin.reduce(stress))) / yields.pop()
     else:
         ratios = np.abs(stress)
         ratio = float(np.fmax.reduce(np.divide(ratios, yield_stress, out=ratios)))

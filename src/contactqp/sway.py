@@ -26,8 +26,8 @@ that is at most :data:`MAX_RELATIVE` of each stretch's compliance (a stretch far
 the bar before it is read through r, whose running sum has no such error: measured on random
 scenes, 6e-9 U of allowance beside a bound of 2e-22 U). c, the mean of r weighted by
 1/k where the run is held at both ends, telescopes too, (Σ E·C_stretch + u_hi − u_lo)/C_run,
-with C the stretches' and the run's compliance summed element by element (pairwise, as the
-run's is kept), not read from φ: a press fit's force is many times F, and φ's error in the
+with C the stretches' and the run's compliance summed element by element (as the run's kept
+sum is), not read from φ: a press fit's force is many times F, and φ's error in the
 divisor would be that many times larger (measured: 10⁶ elements, an exact answer flagged with a
 force bound of 1.4e-5 F).
 """
