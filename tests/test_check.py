@@ -91,6 +91,22 @@ def test_perturbation_within_a_loose_tolerance_is_accepted():
     assert run_check(hand_scene(), u, [2e4], [-1e4], tolerances=loose).verified
 
 
+def test_a_failure_names_the_tolerance_it_failed_as_given():
+    # a user's tolerance printed with one digit (1.5e-7 as "2e-07") is not the tolerance the
+    # residual failed: the message keeps three significant digits (the defaults read as before)
+    u = list(U_CONTACT)
+    u[1] *= 1.001  # the displacement residual is 1.1e-4 of U (the test above)
+    strict = run_check(hand_scene(), u, [2e4], [-1e4])
+    tolerance = 0.75 * strict.residuals["displacement"]
+    tolerance = float(f"{tolerance:.2g}")  # e.g. 8.3e-05: two digits the old message lost
+    assert f"{tolerance:.0e}" != f"{tolerance:.3g}"
+    loose = Tolerances(equilibrium=1e-2, force=1e-2, displacement=tolerance)
+    found = run_check(hand_scene(), u, [2e4], [-1e4], tolerances=loose)
+    assert not found.verified
+    assert f"displacement residual {strict.residuals['displacement']:.2e} > {tolerance:.3g}" in (
+        found.message)
+
+
 def test_wrong_sign_force_fails_sign_and_equilibrium():
     found = run_check(hand_scene(), U_CONTACT, [-2e4], [-1e4])
     assert not found.verified

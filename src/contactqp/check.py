@@ -201,7 +201,7 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
                           tolerances.complementarity, outside, u_size, links_size)
     residuals = {name: value for name, value in bounds.residuals.items()}
     failures = [
-        f"{name} residual {value:.2e} > {getattr(tolerances, name):.0e}"
+        f"{name} residual {value:.2e} > {getattr(tolerances, name):.3g}"
         for name, value in residuals.items()
         if value is not None and not value <= getattr(tolerances, name)
     ]
@@ -287,7 +287,7 @@ def _failed(contact: str, lam: np.ndarray, F: float, U: float,
     names = ["equilibrium", "feasibility", "complementarity", "sign", "force", "displacement"]
     skip = {"complementarity", "sign"} if contact == "equality" else set()
     residuals = {name: (None if name in skip else math.inf) for name in names}
-    notes = [f"{name} residual inf > {getattr(tolerances, name):.0e}"
+    notes = [f"{name} residual inf > {getattr(tolerances, name):.3g}"
              for name, value in residuals.items() if value is not None]
     residuals["natural_map"] = None if contact == "equality" else math.inf
     physical = bool(np.isfinite(lam).all()) and float(np.max(-lam, initial=0.0)) <= (

@@ -172,7 +172,7 @@ def check_problem(model: SparseModel, u_free: np.ndarray, lam: np.ndarray,
         displacement_bound = float(np.abs(u_free - u_ref).max(initial=0.0)) + move_error
         why = ""
     found["force"], found["displacement"] = force_bound / F, displacement_bound / U
-    failures = [f"{name} residual {value:.2e} > {getattr(tolerances, name):.0e}"
+    failures = [f"{name} residual {value:.2e} > {getattr(tolerances, name):.3g}"
                 for name, value in found.items() if not value <= getattr(tolerances, name)]
     if why:
         failures.append(why)
