@@ -2,9 +2,8 @@
 runs taken one by one.
 
 Every expected value is the same computation made without the kept sets (the cache bypassed)
-or the running sum made by numpy over the whole chain, and both must agree bit for bit; or, for
-a run read from u (contactqp.sway), its running sum in exact sums, and for the runs one by one,
-the whole chain at once, both to round-off.
+or the running sum made by numpy over the whole chain, and both must agree bit for bit; for
+the runs one by one, the whole chain at once, to round-off; for long runs, an exact answer.
 """
 
 from __future__ import annotations
@@ -13,7 +12,7 @@ import numpy as np
 import pytest
 
 import contactqp
-from contactqp import bounds, runs, sway
+from contactqp import bounds, runs
 from contactqp.builders import flat_patch
 from contactqp.model import segment_reduce
 from contactqp.random_scenes import random_scene
@@ -160,65 +159,12 @@ def test_segments_of_mostly_one_element_reduce_as_reduceat_does(ufunc, seed):
                           equal_nan=True)
 
 
-def _sway_by_sum(compliance: np.ndarray, u: np.ndarray, steps: np.ndarray,
-                 levels: np.ndarray, lo: int, hi: int, c: float | None, left_held: bool
-                 ) -> tuple[float, float]:
-    """(c, sway) of one run by its definition, element by element in exact sums (math.fsum):
-    the elongation errors (c − r_e)/k_e of the cut residuals r_e = N_e + E_e (``compliance``
-    1/k_e of each element, N_e = k_e·(u_(e+1) − u_e)), run together from the run's first
-    node."""
-    import math
-
-    compliance = compliance[lo:hi]
-    force = np.diff(u[lo:hi + 1]) / compliance
-    link = np.arange(lo, hi)
-    step = np.searchsorted(steps, link, side="right") - 1
-    r = force + np.where(step >= 0, np.append(levels, 0.0)[np.maximum(step, 0)], 0.0)
-    if c is None:
-        c = math.fsum(r * compliance) / math.fsum(compliance)
-    errors = (c - r) * compliance
-    moved = [math.fsum(errors[:j + 1]) for j in range(errors.size)]  # nodes lo + 1 … hi
-    top, bottom, tail = max(moved), min(moved), moved[-1]
-    if left_held:
-        return c, max(abs(top), abs(bottom))
-    return c, max(abs(tail - top), abs(tail - bottom), abs(tail))
-
-
-@pytest.mark.parametrize("seed", [11, 12, 13, 14])
-@pytest.mark.parametrize("held_at", ["both", "left", "right"])
-def test_a_run_read_from_u_bounds_its_running_sum(seed, held_at, monkeypatch):
-    # one run read from u and φ (contactqp.sway) against the running sum of its elongation
-    # errors in exact sums: never below it (φ's round-off is allowed for), and above it by
-    # no more than that allowance; c to round-off. Blocks of 64 nodes: the run spans several
-    monkeypatch.setattr(sway, "BLOCK", 64)
-    rng = np.random.default_rng(seed)
-    n = 700
-    compliance = rng.uniform(1e-10, 1e-8, n - 1)
-    phi = np.concatenate(([0.0], np.cumsum(compliance)))  # as Bar.compliance adds it up
-    u = rng.normal(0.0, 1e-4, n)
-    steps = np.sort(rng.choice(np.arange(1, n), int(rng.integers(0, 6)), replace=False))
-    levels = rng.normal(0.0, 1e5, steps.size)
-    lo, hi = int(rng.integers(0, 100)), int(rng.integers(500, n))
-    c = None if held_at == "both" else float(rng.normal(0.0, 1e5))
-    run = (lo, hi, lo, 0, float(np.add.reduce(compliance[lo:hi])))
-    found = sway.telescoped(phi, compliance, u, steps, levels, run, c, held_at == "left")
-    expected = _sway_by_sum(compliance, u, steps, levels, lo, hi, c, held_at == "left")
-    assert found is not None
-    force_size = np.max(np.abs(np.diff(u) / compliance))
-    assert found[0] == pytest.approx(expected[0], rel=1e-12, abs=1e-12 * force_size)
-    allowance = 2 * (hi - lo + 8 * (steps.size + 1)) * EPS * (
-        abs(found[0]) + np.max(np.abs(levels), initial=0.0)) * phi[hi]
-    assert expected[1] <= found[1] <= expected[1] + allowance + 1e-12 * np.max(np.abs(u))
-    many = np.arange(lo + 1, lo + 2 + sway.FEW_STEPS)  # too many stretches: r's own pass
-    assert sway.telescoped(phi, compliance, u, many, np.ones(many.size), run, c, True) is None
-
-
 @pytest.mark.parametrize("elements", [10**5, 2 * 10**5])
-def test_a_long_run_read_from_u_bounds_the_hulls_own_round_off(elements):
+def test_a_long_run_bounds_the_hulls_own_round_off(elements):
     # a uniform bar loaded at its tip, its wall open: the exact answer is u_j = P·j/k, and
-    # the hull's u, built from the running sum φ, is off from it by φ's round-off (9e-13 U
-    # at 10⁵ elements), which a run read through the same φ must still bound (it read 9e-16
-    # U before φ's round-off was allowed for)
+    # the hull's u, built from the running sum φ of the compliances, is off from it by φ's
+    # round-off (9e-13 U at 10⁵ elements), which the check's bound must cover (a run read
+    # through the same φ, tried this round, bounded it by 9e-16 U)
     bar = contactqp.Bar.uniform(1e-4, 2e11, length=1.0, elements=elements)
     load = 1e4
     scene = contactqp.Scene(bar, (contactqp.Support(0),), (contactqp.Load(elements, load),),
@@ -235,9 +181,9 @@ def test_a_long_run_read_from_u_bounds_the_hulls_own_round_off(elements):
 def test_a_press_fit_beside_a_long_run_is_verified_exact():
     # a wall pressed 1 mm into the tip of a bar of 10⁵ elements, two elements from a wall
     # that holds: the run between them carries 5·10⁴ times the load, and its mean force is
-    # read with its compliance summed element by element, not from φ, whose round-off times
-    # that force made the bound of the exact answer 5.7e-8 F here (4.4e-11 F now) and
-    # flagged it at 10⁶ elements (1.4e-5 F); the bound must stay at round-off
+    # the mean of its cut residuals, not read from φ, whose round-off times that force made
+    # the bound of the exact answer 5.7e-8 F here and flagged it at 10⁶ elements (1.4e-5 F)
+    # in a version tried this round; the bound must stay at round-off
     n = 10**5
     bar = contactqp.Bar.uniform(1e-4, 2e11, length=1.0, elements=n)
     scene = contactqp.Scene(bar, (contactqp.Support(0),), (contactqp.Load(n // 2, 1e3),),
@@ -260,19 +206,18 @@ def _few_walls(scene: contactqp.Scene, rng: np.random.Generator) -> contactqp.Sc
 
 @pytest.mark.parametrize("method", ["lagrange", "penalty", "lemke"])
 def test_runs_taken_one_by_one_bound_as_the_whole_chain_does(method, monkeypatch):
-    # the check goes run by run where few runs sway, reading them from u where few loads act
-    # on them; the same scenes checked over the whole chain (every run reduced at once) must
-    # give the same bounds up to round-off, and the runs one by one must have been taken
+    # the check goes run by run where few runs sway; the same scenes checked over the whole
+    # chain (every run reduced at once) must give the same bounds up to round-off, and the
+    # runs one by one must have been taken
     rng = np.random.default_rng()  # fresh scenes each run; the seed is in the message
     seed = int(rng.integers(2**32))
     rng = np.random.default_rng(seed)
-    read = []
-    real = sway.telescoped
-    monkeypatch.setattr(runs, "telescoped",
-                        lambda *a: read.append(real(*a)) or read[-1])
+    taken = []
+    real = runs._few_swaying
+    monkeypatch.setattr(runs, "_few_swaying", lambda *a: taken.append(1) or real(*a))
     scenes = [random_scene(rng, max_elements=400 if i % 2 else 8, contacts=i % 3 != 0,
                            floating=0.5 if i % 4 == 0 else 0.0) for i in range(16)]
-    # ... and each with at most two of its walls: few loads on the runs, read from u
+    # ... and each with at most two of its walls: few loads on the runs
     scenes += [thin for scene in scenes if (thin := _few_walls(scene, rng)) is not None]
     answers = []
     for scene in scenes:
@@ -280,7 +225,7 @@ def test_runs_taken_one_by_one_bound_as_the_whole_chain_does(method, monkeypatch
             answers.append(contactqp.solve(scene, method))
         except (contactqp.SolverError, contactqp.SceneError):  # a free bar left unheld
             answers.append(None)
-    assert any(found is not None for found in read), f"seed {seed}: no run read from u"
+    assert taken, f"seed {seed}: no runs taken one by one"
     with monkeypatch.context() as patched:
         patched.setattr(runs, "FEW_SWAYING", -1)
         patched.setattr(runs, "LONG_RUNS", 2**62)
@@ -291,17 +236,14 @@ def test_runs_taken_one_by_one_bound_as_the_whole_chain_does(method, monkeypatch
                 scene.bars, scene.supports, scene.loads, scene.walls,
                 contacts=scene.contacts, distributed=scene.distributed), method)
             assert np.array_equal(whole.u, one_by_one.u), f"seed {seed}"
-            # the two sum the same terms in other orders, and c of a run read from u comes
-            # from u's difference across it (measured over 75 seeds: forces up to 4e-16 F
-            # apart); a run read from u adds an allowance for φ's round-off, at most
-            # MAX_RELATIVE of what the run's forces stretch it by, so its displacement bound
-            # may be larger, never smaller beyond round-off
+            # the two sum the same terms in other orders (a run's weighted mean by np.dot, its
+            # running sum from its own start): measured over 75 seeds up to 5e-14 F and 1e-13
+            # U apart (4e-13 U once), 10⁸ times below the check's tolerances (1e-5)
             F, U = whole.force_scale, whole.displacement_scale
             assert one_by_one.force_error_bound == pytest.approx(
                 whole.force_error_bound, rel=1e-9, abs=ROUND_OFF * F), f"seed {seed}"
             if whole.displacement_error_bound == np.inf:  # a bar the answer leaves free
                 assert one_by_one.displacement_error_bound == np.inf, f"seed {seed}"
                 continue
-            more = one_by_one.displacement_error_bound - whole.displacement_error_bound
-            assert -ROUND_OFF * U <= more <= 1e-9 * whole.displacement_error_bound + (
-                4 * sway.MAX_RELATIVE * U), f"seed {seed}"
+            assert one_by_one.displacement_error_bound == pytest.approx(
+                whole.displacement_error_bound, rel=1e-9, abs=ROUND_OFF * U), f"seed {seed}"

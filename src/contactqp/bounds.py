@@ -72,7 +72,7 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
         kept_external = external.copy()
         kept_external[contact_part][~pushing[entry]] = 0.0
         outside = Running.of(layout.n_nodes, nodes, kept_external)
-    force_error, sway = propagate(layout, held, links, outside, u)
+    force_error, sway = propagate(layout, held, links, outside)
     pair = 0.0 if equality else opposed_forces(layout, lam)
     # an open row moved onto its wall (it penetrates) is held too, with no force of its own
     # closing a bar contact's gap δ moves each end by its share, δ·s/s_end (a wall's node: δ)

@@ -26,7 +26,6 @@ from contactqp.model import (
     node_set,
     segment_reduce,
 )
-from contactqp.sway import telescoped
 
 LONG_RUNS = LONG_SEGMENTS  # runs reduced one by one where at most one in this many is long
 SHORT_RUNS = 16  # runs of the same length up to this are reduced one element at a time
@@ -204,7 +203,7 @@ class Running:
 
 
 def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
-              outside: Running, u: np.ndarray | None = None) -> tuple[float, float]:
+              outside: Running) -> tuple[float, float]:
     """What the imbalance of an answer does with the ``held`` nodes (sorted) fixed: (the
     largest force error at a held node, N; the largest displacement error, m).
 
@@ -223,7 +222,7 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
         return np.inf, np.inf
     run = runs(layout, held)
     if run.swaying.size <= max(FEW_SWAYING, run.starts.size // LONG_RUNS):
-        return _few_swaying(layout, held, links, outside, run, u)
+        return _few_swaying(layout, held, links, outside, run)
     r = outside.plus(links)
     if element.size != r.size:  # junctions between bars: not every link is an element
         r = r[element]
@@ -256,12 +255,11 @@ def _run_levels(r: np.ndarray, compliance: np.ndarray, outside: Running, run: Ru
 
 
 def _few_swaying(layout: Layout, held: np.ndarray, links: np.ndarray, outside: Running,
-                 run: Runs, u: np.ndarray | None) -> tuple[float, float]:
+                 run: Runs) -> tuple[float, float]:
     """:func:`propagate` where few runs can sway (a pressed patch: 9.5·10⁴ runs, one long;
     one wall on a bar: one run), run by run over those alone. A run of one element held at
     both ends has c = r there, the mean of one value, and moves no node: r at each run's
-    first element is every such c. Where few loads act on a run, it is read from u
-    (:func:`telescoped`), with no pass over r."""
+    first element is every such c."""
     element, compliance = layout.elements
     first = run.first_links
     c_run = np.add(links[first], outside.at(first))
@@ -278,18 +276,11 @@ def _few_swaying(layout: Layout, held: np.ndarray, links: np.ndarray, outside: R
             c = float(outside.at(int(run.last[i])))
         else:  # before the bar's tail
             c = float(outside.at(int(run.first[i]) - 1)) if run.first[i] > 0 else 0.0
-        found = None
-        if u is not None and outside.steps is not None:
-            found = telescoped(layout.compliance, compliance, u, outside.steps, outside.levels,
-                               (lo, hi, a, int(run.first[i]), float(run.compliance[i])), c,
-                               left)
-        if found is None:
-            r = outside.plus(links, lo, hi)
-            if c is None:  # in one pass
-                c = float(np.dot(r, compliance[a:b])) / float(run.compliance[i])
-            found = c, _run_sway(r, compliance[a:b], c, left)
-        c_run[i] = found[0]
-        sway = max(sway, found[1])
+        r = outside.plus(links, lo, hi)
+        if c is None:  # in one pass
+            c = float(np.dot(r, compliance[a:b])) / float(run.compliance[i])
+        c_run[i] = c
+        sway = max(sway, _run_sway(r, compliance[a:b], c, left))
     return _held_jumps(held, c_run, outside, run), sway
 
 
