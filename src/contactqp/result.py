@@ -274,6 +274,7 @@ def yield_warning(layout: Layout, stress: np.ndarray) -> tuple[float | None, lis
         return None, []
     scene = layout.scene
     yields = {b.yield_stress for b in scene.bars}
+    ratios = None
     if len(yields) == 1 and stress.size:  # every bar the same: two reductions, no |σ| array
         # (x/y is monotone in x, so the largest |σ| over y is the largest |σ|/y, bit for bit)
         ratio = max(float(np.fmax.reduce(stress)), -float(np.fmin.reduce(stress))) / yields.pop()
@@ -282,7 +283,8 @@ def yield_warning(layout: Layout, stress: np.ndarray) -> tuple[float | None, lis
         ratio = float(np.fmax.reduce(np.divide(ratios, yield_stress, out=ratios)))
     if not ratio > 1.0:
         return ratio, []
-    ratios = np.abs(stress) / yield_stress
+    if ratios is None:  # only a warning needs the element
+        ratios = np.abs(stress) / yield_stress
     e = int(np.flatnonzero(ratios == ratio)[0])  # nanargmax's element, without its NaN pass
     where = f"element {e}"
     if len(scene.bars) > 1:

@@ -245,13 +245,19 @@ def _run_levels(r: np.ndarray, compliance: np.ndarray, outside: Running, run: Ru
     c = run.reduce(np.add, weighted)
     del weighted
     c /= run.compliance  # the mean (held at both ends)
-    after_bar = outside.at(run.last)  # held at the left end only: past the bar's head
-    before_bar = outside.at(np.maximum(run.first - 1, 0))  # ... at the right end only
-    before_bar[run.first <= 0] = 0.0
-    np.copyto(after_bar, before_bar, where=~run.left_held)
-    del before_bar
-    np.copyto(c, after_bar, where=~(run.left_held & run.right_held))
+    np.copyto(c, _free_end_levels(outside, run), where=~(run.left_held & run.right_held))
     return c
+
+
+def _free_end_levels(outside: Running, run: Runs, index: Any = slice(None)) -> np.ndarray:
+    """c of the runs ``index`` as if held at one end only: the cut residual past the bar's
+    head where held at the left end, before the bar's tail otherwise (a new array)."""
+    first, left_held = run.first[index], run.left_held[index]
+    after_bar = outside.at(run.last[index])  # held at the left end only: past the bar's head
+    before_bar = outside.at(np.maximum(first - 1, 0))  # ... at the right end only
+    before_bar[first <= 0] = 0.0
+    np.copyto(after_bar, before_bar, where=~left_held)
+    return after_bar
 
 
 def _few_swaying(layout: Layout, held: np.ndarray, links: np.ndarray, outside: Running,
@@ -264,20 +270,15 @@ def _few_swaying(layout: Layout, held: np.ndarray, links: np.ndarray, outside: R
     first = run.first_links
     c_run = np.add(links[first], outside.at(first))
     sway = 0.0
-    for i, a, b in zip(run.swaying.tolist(), run.starts[run.swaying].tolist(),
-                       run.ends[run.swaying].tolist()):
+    free_end = _free_end_levels(outside, run, run.swaying).tolist()
+    for i, a, b, c in zip(run.swaying.tolist(), run.starts[run.swaying].tolist(),
+                          run.ends[run.swaying].tolist(), free_end):
         # a run lies in one bar (runs start at every bar's first element): its elements are
         # the links lo … hi − 1, in order
         lo, hi = int(element[a]), int(element[b - 1]) + 1
         left = bool(run.left_held[i])
-        if left and run.right_held[i]:
-            c = None  # the weighted mean of r
-        elif left:  # past the bar's head
-            c = float(outside.at(int(run.last[i])))
-        else:  # before the bar's tail
-            c = float(outside.at(int(run.first[i]) - 1)) if run.first[i] > 0 else 0.0
         r = outside.plus(links, lo, hi)
-        if c is None:  # in one pass
+        if left and run.right_held[i]:  # the weighted mean of r, in one pass
             c = float(np.dot(r, compliance[a:b])) / float(run.compliance[i])
         c_run[i] = c
         sway = max(sway, _run_sway(r, compliance[a:b], c, left))
