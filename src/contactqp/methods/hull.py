@@ -42,7 +42,6 @@ from contactqp.methods.stretch import Stretch, displacements
 from contactqp.model import (
     Condensed,
     Model,
-    count_up_to,
     largest,
     run_ends,
     run_starts,
@@ -262,6 +261,47 @@ class WallsOnChain:
         vertices = vertices[(vertices >= 0) & (vertices < nodes.size)]
         return nodes[vertices[gaps[vertices] < -tolerance]]
 
+    def passed_between(self, side: int, chosen: np.ndarray, ends: Stretch,
+                       w_chosen: np.ndarray, tolerance: float
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[tuple[int, int, int]]]:
+        """Where the walls on ``side`` in the stretch ``ends`` are passed once the nodes
+        ``chosen`` (sorted, w = ``w_chosen`` there) are held too: (the stretch's walled nodes
+        not chosen, φ and the signed gap at each, and (k, a, b) for each sub-stretch k between
+        chosen k − 1 and k with a passed wall, its nodes ``nodes[a:b]``)."""
+        walled = self.wall_nodes[side]
+        nodes = walled[np.searchsorted(walled, ends.first): np.searchsorted(walled, ends.stop)]
+        anchors, w = ends.anchors(chosen, w_chosen)
+        every = nodes.size == ends.stop - ends.first  # a wall at every node: read in place
+        if every:  # the chosen nodes' gaps are worked out too, and set aside below
+            at = slice(ends.first, ends.stop)
+            phi, u_free, bound = self.phi[at], self.u_free[at], self.bound[side][at]
+        else:
+            chosen_here = np.zeros(ends.stop - ends.first, dtype=bool)
+            chosen_here[chosen - ends.first] = True
+            free = ~chosen_here[nodes - ends.first]
+            nodes = nodes[free]
+            phi, u_free, bound = self.phi[nodes], self.u_free[nodes], self.bound[side][nodes]
+        gaps = np.interp(phi, self.phi[anchors], w)  # w, then u, then the signed gap
+        np.subtract(u_free, gaps, out=gaps)
+        (np.subtract if side > 0 else np.add)(bound, gaps, out=gaps)
+        passed = gaps < -tolerance
+        if every:
+            passed[chosen - ends.first] = False
+        if not passed.any():
+            return nodes, phi, gaps, []
+        # each passed node's sub-stretch: how many chosen nodes lie before it
+        parts = np.searchsorted(chosen, nodes[passed])
+        parts = parts[run_starts(parts)].tolist()
+        if every:  # sub-stretch k: the nodes strictly between chosen k − 1 and k
+            spans = [(k, 0 if k == 0 else int(chosen[k - 1]) + 1 - ends.first,
+                      nodes.size if k == chosen.size else int(chosen[k]) - ends.first)
+                     for k in parts]
+        else:  # the nodes are in order: each sub-stretch's are one slice of them
+            spans = [(k, int(np.searchsorted(nodes, chosen[k - 1])) if k else 0,
+                      int(np.searchsorted(nodes, chosen[k])) if k < chosen.size
+                      else nodes.size) for k in parts]
+        return nodes, phi, gaps, spans
+
     def settle(self, side: int, chosen: np.ndarray, ends: Stretch, tolerance: float,
                adding: dict[int, list[np.ndarray]]) -> None:
         """Add to ``adding`` the walls that the stretch ``ends`` needs once the walls
@@ -278,34 +318,10 @@ class WallsOnChain:
             other = -side
             if not chosen.size or other not in self.sides:
                 continue
-            walled = self.wall_nodes[other]
-            nodes = walled[np.searchsorted(walled, ends.first): np.searchsorted(walled, ends.stop)]
-            # each node's sub-stretch k, between chosen k − 1 and k: the chosen before it
-            chosen_here = np.zeros(ends.stop - ends.first, dtype=bool)
-            chosen_here[chosen - ends.first] = True
-            count = count_up_to(chosen_here)
-            if nodes.size == chosen_here.size:  # a wall at every node: no gather by node
-                free = ~chosen_here
-                nodes, part = nodes[free], count[free]
-            else:
-                local = nodes - ends.first
-                free = ~chosen_here[local]
-                nodes, part = nodes[free], count[local[free]]
             w_chosen = self.u_free[chosen] - side * self.bound[side][chosen]
-            anchors, w = ends.anchors(chosen, w_chosen)
-            phi = self.phi[nodes]
-            gaps = np.interp(phi, self.phi[anchors], w)  # w, then u, then the signed gap
-            np.subtract(self.u_free[nodes], gaps, out=gaps)
-            (np.subtract if other > 0 else np.add)(self.bound[other][nodes], gaps, out=gaps)
-            passed = gaps < -tolerance
-            if not passed.any():
-                continue
-            parts = part[passed]
-            parts = parts[run_starts(parts)]
-            # part rises along the stretch: each sub-stretch's nodes are one slice
-            begin = np.searchsorted(part, parts, side="left").tolist()
-            finish = np.searchsorted(part, parts, side="right").tolist()
-            for k, a, b in zip(parts.tolist(), begin, finish):
+            nodes, phi, gaps, spans = self.passed_between(other, chosen, ends, w_chosen,
+                                                          tolerance)
+            for k, a, b in spans:
                 sub = ends.between(chosen, k, w_chosen)
                 found = self.stretch_walls(other, nodes[a:b], gaps[a:b], sub.left, sub.right,
                                            tolerance, phi[a:b])
