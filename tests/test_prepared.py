@@ -149,6 +149,17 @@ def test_the_layout_shares_what_the_values_leave_alone():
     assert scene.walls[0].gap == DEFAULT_GAP and scene.loads[0].force == DEFAULT_F
 
 
+def test_a_model_for_new_values_shares_what_k_and_the_supports_decide():
+    # worked out once on the prepared model, not again for each solve's model; what depends
+    # on the loads (P, and the model held for scales, which carries P) is its own
+    prepared = contactqp.prepare()
+    model = prepared.model.with_layout(prepared.scene.with_values([2.0e5], [3e-4]).layout)
+    for name in ("determinate", "compliance_to_support", "floating"):
+        assert getattr(model, name) is getattr(prepared.model, name)
+    assert model.stiffest == prepared.model.band[0].max()
+    assert model.held is model and model.P.tolist() == [0.0, 2.0e5, 0.0, 0.0]
+
+
 @pytest.mark.parametrize(("arguments", "message"), [
     ({"loads": [1.0, 2.0]}, r"loads must have shape \(1,\) \(one per point load"),
     ({"loads": [float("nan")]}, r"loads\[0\] must be finite, got nan"),

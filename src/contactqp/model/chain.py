@@ -58,9 +58,15 @@ class Model:
         """This model for a scene that differs only in its load values and gaps (``layout``
         from :meth:`Layout.with_values`): the numbering, K and C shared, P and g anew."""
         model = Model(layout, self.free, self.band, free_loads(layout), self.C, layout.rows.gap)
-        for name in ("K", "determinate", "compliance_to_support", "stiffest"):  # K, not P or g
-            if name in self.__dict__:
-                model.__dict__[name] = self.__dict__[name]
+        # what K and the supports decide, worked out here once for every model made from this
+        # one (a prepared scene's solves), and K itself if made; never P or g
+        kept = ["floating", "determinate", "stiffest"]
+        if self.determinate is not None:
+            kept.append("compliance_to_support")
+        for name in kept:
+            model.__dict__[name] = getattr(self, name)
+        if "K" in self.__dict__:
+            model.__dict__["K"] = self.K
         return model
 
     @cached_property
