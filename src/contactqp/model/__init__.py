@@ -5,7 +5,9 @@
   contact rows, nodal loads), and what is computed from them;
 - :mod:`~contactqp.model.chain`: the Model, K (band), P, C, g, the solves with K, the scales
   F and U;
-- :mod:`~contactqp.model.condense`: the problem condensed onto the contact nodes.
+- :mod:`~contactqp.model.condense`: the problem condensed onto the contact nodes;
+- :mod:`~contactqp.model.reading`: what methods read off a model besides its solves with K
+  (the strain formulation's rows, the stiffness the walls see, forces without circulation).
 """
 
 from contactqp.layout import (
@@ -36,13 +38,11 @@ from contactqp.model.chain import (
     determinate_chain_solve,
     displacement_scale,
     displacement_scale_rule,
-    elongation_rows,
     force_scale_rule,
     scene_model,
-    wall_stiffness,
-    without_circulation,
 )
 from contactqp.model.condense import Condensed, condense, condensed_model
+from contactqp.model.reading import elongation_rows, wall_stiffness, without_circulation
 
 __all__ = [
     "LONG_SEGMENTS", "Condensed", "ContactRows", "Layout", "Model", "bar_groups", "bar_load_terms", "build_model", "condense",
