@@ -2,6 +2,8 @@
 
 :func:`solve_problem` is what ``contactqp.solve(problem, method)`` calls. Each method that
 needs no chain solves a problem (:data:`PROBLEM_METHODS`); Nitsche is refused with the reason.
+A solve that fails (a SolverError, or an answer the check does not verify) on rows that no u
+meets all at once ends in a ProblemError naming them (:mod:`contactqp.problem_feasibility`).
 """
 
 from __future__ import annotations
@@ -10,12 +12,15 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from contactqp.errors import OptionError
+import numpy as np
+
+from contactqp.errors import OptionError, ProblemError, SolverError
 from contactqp.methods import checked_options, complementarity
 from contactqp.methods import sparse as on_sparse
 from contactqp.methods.schur import solve_schur
 from contactqp.model.sparse import SparseModel, build_sparse_model
 from contactqp.problem import Problem
+from contactqp.problem_feasibility import conflicting_rows
 from contactqp.problem_result import ProblemResult, make_problem_result
 from contactqp.result import Solution
 
@@ -60,10 +65,28 @@ def solve_problem(problem: Problem, method: str = "lagrange", contact: str = "in
     start = time.perf_counter()
     model = build_sparse_model(problem)
     built = time.perf_counter()
-    solution = solve_model(model, method, contact, options)
+    try:
+        solution = solve_model(model, method, contact, options)
+    except SolverError:
+        _refuse_rows_that_leave_no_u(problem, contact)
+        raise
     solved = time.perf_counter()
-    return make_problem_result(model, solution, method=method, contact=contact, options=options,
-                               timings={"build": built - start, "solve": solved - built})
+    result = make_problem_result(model, solution, method=method, contact=contact,
+                                 options=options,
+                                 timings={"build": built - start, "solve": solved - built})
+    if not result.verified:
+        _refuse_rows_that_leave_no_u(problem, contact)
+    return result
+
+
+def _refuse_rows_that_leave_no_u(problem: Problem, contact: str) -> None:
+    """After a failed solve: a ProblemError naming rows that no u meets all at once, if there
+    are such (:mod:`contactqp.problem_feasibility`)."""
+    equality = (np.ones(problem.m, dtype=bool) if contact == "equality"
+                else np.asarray(problem.equality))
+    conflict = conflicting_rows(problem.C, problem.g, equality, problem.names)
+    if conflict:
+        raise ProblemError(conflict)
 
 
 def solve_model(model: SparseModel, method: str, contact: str, options: dict[str, Any]
