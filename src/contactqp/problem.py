@@ -28,6 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from contactqp.errors import ProblemError
+from contactqp.problem_feasibility import row_conflict
 
 KINDS = ("inequality", "equality")
 SYMMETRY_RTOL = 1e-10  # K may differ from Kᵀ by this much of its largest entry (round-off)
@@ -166,42 +167,6 @@ def _symmetric(K: sp.csr_array) -> None:
                            f"{float(diagonal[i])!r} < 0")
 
 
-def _rows(C: sp.csr_array, g: np.ndarray, equality: np.ndarray, names: tuple[str, ...]) -> None:
-    """No zero row, no constraint twice, and no pair of parallel rows that leave no u."""
-    empty = np.flatnonzero(np.diff(C.indptr) == 0)
-    if empty.size:
-        raise ProblemError(f"C row {empty[0]} ({names[empty[0]]}) is zero: it constrains "
-                           "nothing (drop it)")
-    scale = np.sqrt(np.asarray((C.multiply(C)).sum(axis=1)).reshape(-1))
-    unit = sp.csr_array(sp.diags_array(1.0 / scale) @ C)
-    gram = sp.triu(unit @ unit.T, k=1).tocoo()
-    parallel = np.abs(gram.data) >= 1.0 - 1e-12
-    for i, j, value in zip(gram.row[parallel], gram.col[parallel], gram.data[parallel]):
-        _parallel_pair(int(i), int(j), float(np.sign(value)), g / scale, equality, names)
-
-
-def _parallel_pair(i: int, j: int, sign: float, gaps: np.ndarray, equality: np.ndarray,
-                   names: tuple[str, ...]) -> None:
-    """Rows i and j are parallel (sign +1) or opposite (−1); ``gaps`` per unit row. The same
-    constraint twice, or two that no u meets at once, is an error; a parallel row whose gap
-    never binds is allowed (a redundant row)."""
-    pair = f"C rows {i} ({names[i]}) and {j} ({names[j]})"
-    a, b = gaps[i], sign * gaps[j]  # row j as a bound on c·u: <= b (sign +1) or >= b (−1)
-    tight = abs(a - b) <= 1e-12 * max(abs(a), abs(b))
-    if tight and (sign > 0 or equality[i] or equality[j]):
-        raise ProblemError(f"{pair} are the same constraint (the same row and gap, up to a "
-                           "positive factor): drop one")
-    if sign > 0:  # c·u <= a and c·u <= b: only equalities can conflict
-        clash = (equality[i] and equality[j]) or (equality[i] and a > b) or (
-            equality[j] and b > a)
-    else:  # c·u <= a and c·u >= b
-        clash = b > a and not tight or (equality[i] and equality[j] and not tight)
-    if clash:
-        raise ProblemError(f"{pair} are {'parallel' if sign > 0 else 'opposite'} and their "
-                           f"gaps ({gaps[i]:.6g} and {gaps[j]:.6g} per unit row) leave no u "
-                           "that satisfies both")
-
-
 def _prescribed(problem: Problem, n: int, C: sp.csr_array) -> tuple[np.ndarray, np.ndarray]:
     dofs = np.zeros(0, dtype=np.intp) if problem.prescribed is None else np.asarray(
         problem.prescribed)
@@ -251,7 +216,9 @@ def validated(problem: Problem) -> dict[str, Any]:
     C = _sparse("C", problem.C, (g.size, n))
     kinds = _labels("kinds", problem.kinds, g.size, lambda i: "inequality")
     names = _labels("names", problem.names, g.size, lambda i: f"row[{i}]")
-    _rows(C, g, np.array([k == "equality" for k in kinds], dtype=bool), names)
+    conflict = row_conflict(C, g, np.array([k == "equality" for k in kinds], dtype=bool), names)
+    if conflict:
+        raise ProblemError(conflict)
     dofs, values = _prescribed(problem, n, C)
     coordinates = problem.coordinates
     if coordinates is not None:

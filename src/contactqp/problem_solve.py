@@ -2,8 +2,10 @@
 
 :func:`solve_problem` is what ``contactqp.solve(problem, method)`` calls. Each method that
 needs no chain solves a problem (:data:`PROBLEM_METHODS`); Nitsche is refused with the reason.
-A solve that fails (a SolverError, or an answer the check does not verify) on rows that no u
-meets all at once ends in a ProblemError naming them (:mod:`contactqp.problem_feasibility`).
+A Problem's rows are checked by their kinds when it is made; a solve with
+``contact="equality"`` that fails (a SolverError, or an answer the check does not verify) on
+rows that, held on their gaps, no u meets all at once ends in a ProblemError naming them
+(:mod:`contactqp.problem_feasibility`).
 """
 
 from __future__ import annotations
@@ -65,26 +67,28 @@ def solve_problem(problem: Problem, method: str = "lagrange", contact: str = "in
     start = time.perf_counter()
     model = build_sparse_model(problem)
     built = time.perf_counter()
+    held = contact == "equality" and not problem.equality.all()  # rows held as never checked
     try:
         solution = solve_model(model, method, contact, options)
     except SolverError:
-        _refuse_rows_that_leave_no_u(problem, contact)
+        if held:
+            _refuse_rows_that_leave_no_u(problem)
         raise
     solved = time.perf_counter()
     result = make_problem_result(model, solution, method=method, contact=contact,
                                  options=options,
                                  timings={"build": built - start, "solve": solved - built})
-    if not result.verified:
-        _refuse_rows_that_leave_no_u(problem, contact)
+    if held and not result.verified:
+        _refuse_rows_that_leave_no_u(problem)
     return result
 
 
-def _refuse_rows_that_leave_no_u(problem: Problem, contact: str) -> None:
-    """After a failed solve: a ProblemError naming rows that no u meets all at once, if there
-    are such (:mod:`contactqp.problem_feasibility`)."""
-    equality = (np.ones(problem.m, dtype=bool) if contact == "equality"
-                else np.asarray(problem.equality))
-    conflict = conflicting_rows(problem.C, problem.g, equality, problem.names)
+def _refuse_rows_that_leave_no_u(problem: Problem) -> None:
+    """After a failed solve with every row held on its gap (``contact="equality"``), which
+    the problem's own check of its rows (by their kinds) did not cover: a ProblemError naming
+    rows that no u meets all at once, if there are such."""
+    conflict = conflicting_rows(problem.C, problem.g, np.ones(problem.m, dtype=bool),
+                                problem.names)
     if conflict:
         raise ProblemError(conflict)
 
