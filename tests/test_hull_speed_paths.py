@@ -122,3 +122,30 @@ def test_stretches_in_two_bars_with_no_held_node_between():
     assert np.abs(result.contact_force - exact.contact_force).max() <= (
         result.force_error_bound + 1e-12 * result.force_scale)
     assert result.verified, result.message
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("dropped", [0.0, 0.001, 0.3, 0.9])
+def test_the_kept_points_slopes_are_their_own_division_bit_for_bit(seed, dropped):
+    """The minorant's slopes between kept points (a point's step where its next point is kept,
+    worked out again only across the dropped ones) are, to the last bit, the division
+    diff(y[kept]) / diff(x[kept]) over the kept points gathered; and the corners and slopes
+    of the hull are those of the gathered points' own hull (the view of a run of consecutive
+    points read as the gather of it)."""
+    from contactqp.methods import minorant
+
+    rng = np.random.default_rng(seed)
+    n = 2000
+    x = np.cumsum(rng.uniform(1e-3, 1.0, n))
+    y = rng.normal(size=n) * 10.0 ** rng.uniform(-12, 3)
+    kept = rng.uniform(size=n) >= dropped
+    kept[[0, -1]] = True
+    points = np.flatnonzero(kept)
+    step = np.diff(y) / np.diff(x)
+    expected = np.diff(y[points]) / np.diff(x[points])
+    assert minorant._kept_slopes(x, y, step, kept).tobytes() == expected.tobytes()
+    # a convex curve with a few dents: one pruning pass, then the runs joined by tangents
+    curve = (x - x.mean()) ** 2 * 1e-6 + np.where(rng.uniform(size=n) < 0.002, 1.0, 0.0)
+    corners, slope = minorant._hull_corners(x, curve)
+    assert slope.tobytes() == (np.diff(curve[corners]) / np.diff(x[corners])).tobytes()
+    assert minorant._read(x, corners[5:40]).tobytes() == x[corners[5:40]].tobytes()

@@ -153,7 +153,10 @@ def _pushing(layout: Layout, lam: np.ndarray, pen: np.ndarray, hold: float,
     strong = (lam > hold) | wedged
     held = node_set(layout.n_nodes, layout.support_nodes, row_nodes[strong[layout.by_entry]])
     s, s_ends = row_stiffness(layout, held, strong, ends=True)
-    return (lam > np.maximum(-pen, 0.0) * s) | wedged, (strong, held, s, s_ends)
+    closing = np.negative(pen)  # gap⁺·s, what closing each gap takes, in one array
+    pushing = np.greater(lam, np.multiply(np.maximum(closing, 0.0, out=closing), s, out=closing))
+    pushing |= wedged
+    return pushing, (strong, held, s, s_ends)
 
 
 def _wedged(layout: Layout) -> np.ndarray:

@@ -64,22 +64,21 @@ def _hull_corners(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     the hull as it is: one such pass leaves convex runs between a few dents (the channel,
     the flat patch), joined by their common tangents (:func:`_join_convex_runs`); many dents
     go to a quickhull (:func:`_lower_hull`)."""
-    corners = None  # all the points (read in place, not gathered)
+    step = np.diff(y) / np.diff(x)  # the slope of every step, worked out once
+    slope, kept = step, None  # every point a corner (no mask made)
     for _ in range(PRUNING_PASSES):
-        if corners is None:
-            slope = np.diff(y) / np.diff(x)
-        else:
-            slope = np.diff(y[corners]) / np.diff(x[corners])
         rises = slope[1:] > slope[:-1]
         if rises.all():
-            return np.arange(x.size) if corners is None else corners, slope
-        keep = np.concatenate(([True], rises, [True]))
-        corners = np.flatnonzero(keep) if corners is None else corners[keep]
-    if corners is None:
-        corners = np.arange(x.size)
+            return (np.arange(x.size) if kept is None else np.flatnonzero(kept)), slope
+        if kept is None:
+            kept = np.ones(x.size, dtype=bool)
+            kept[1:-1] = rises
+        else:
+            kept[np.flatnonzero(kept)[1:-1][~rises]] = False
+        slope = _kept_slopes(x, y, step, kept)
+    corners = np.arange(x.size) if kept is None else np.flatnonzero(kept)
     # what is left is convex but at a few points (each pass above dropped one point there):
     # join its convex runs by their common tangents; many such points, a quickhull
-    slope = np.diff(y[corners]) / np.diff(x[corners])
     dents = np.flatnonzero(slope[1:] <= slope[:-1]) + 1  # no corner there
     if dents.size == 0:  # the last pass left only corners
         return corners, slope
@@ -87,7 +86,27 @@ def _hull_corners(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     corners = _lower_hull(x, y, corners) if joined is None else joined
     if corners is None:
         return None
-    return corners, np.diff(y[corners]) / np.diff(x[corners])
+    if 2 * corners.size < x.size:  # few corners (a quickhull's): their slopes directly
+        return corners, np.diff(y[corners]) / np.diff(x[corners])
+    kept = np.zeros(x.size, dtype=bool)
+    kept[corners] = True
+    return corners, _kept_slopes(x, y, step, kept)
+
+
+def _kept_slopes(x: np.ndarray, y: np.ndarray, step: np.ndarray, kept: np.ndarray
+                 ) -> np.ndarray:
+    """The slope between each two consecutive points ``kept`` (a mask; the first and the last
+    point kept): a kept point's next point is most often kept too, and then the slope is its
+    ``step`` (the slope to the next point, the same division bit for bit); only across the
+    points dropped is it worked out again (no gather of every kept point)."""
+    slope = step[kept[:-1]]  # each kept point but the last starts a pair
+    dropped = np.flatnonzero(~kept)
+    if dropped.size:  # each run of dropped points: the kept points either side of it
+        first = np.flatnonzero(run_starts(dropped - np.arange(dropped.size)))
+        a = dropped[first] - 1
+        b = dropped[np.append(first[1:], dropped.size) - 1] + 1
+        slope[a - first] = (y[b] - y[a]) / (x[b] - x[a])  # a's place among the kept
+    return slope
 
 
 def _isotonic_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -113,10 +132,13 @@ def _join_convex_runs(x: np.ndarray, y: np.ndarray, corners: np.ndarray,
         if run.size == 0:  # two dents side by side
             continue
         i, j = hull.size - 1, 0
-        x_run, y_run, x_hull, y_hull = x[run], y[run], x[hull], y[hull]  # read once a run
+        x_run, y_run, x_hull, y_hull = (_read(x, run), _read(y, run), _read(x, hull),
+                                        _read(y, hull))  # read once a run
+        to_run, across = np.empty(run.size), np.empty(run.size)
         for _ in range(HULL_LEVELS):
             with np.errstate(divide="ignore", invalid="ignore"):
-                to_run = (y_run - y_hull[i]) / (x_run - x_hull[i])
+                np.subtract(y_run, y_hull[i], out=to_run)
+                np.divide(to_run, np.subtract(x_run, x_hull[i], out=across), out=to_run)
                 j_new = run.size - 1 - int(np.argmin(to_run[::-1]))  # the last of a tie
                 from_hull = (y_run[j_new] - y_hull) / (x_run[j_new] - x_hull)
                 i_new = int(np.argmax(from_hull))  # the first of a tie
@@ -127,6 +149,13 @@ def _join_convex_runs(x: np.ndarray, y: np.ndarray, corners: np.ndarray,
             return None
         hull = np.concatenate((hull[: i + 1], run[j:]))
     return hull
+
+
+def _read(values: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """``values[points]`` (``points`` increasing), as a view where they are consecutive."""
+    if points.size and points[-1] - points[0] + 1 == points.size:
+        return values[points[0]: points[-1] + 1]
+    return values[points]
 
 
 def _lower_hull(x: np.ndarray, y: np.ndarray, candidates: np.ndarray) -> np.ndarray | None:
