@@ -15,6 +15,8 @@ from __future__ import annotations
 import copy
 import itertools
 import math
+import subprocess
+import sys
 from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
@@ -405,3 +407,12 @@ def values(scene: contactqp.Scene) -> tuple[np.ndarray, np.ndarray]:
     loads = np.array([p.force for p in scene.loads] + [q.intensity for q in scene.distributed])
     gaps = np.array([w.gap for w in scene.walls] + [c.gap for c in scene.contacts])
     return loads, gaps
+
+
+def imported_by(code: str, modules: tuple[str, ...]) -> list[str]:
+    """Which of ``modules`` a fresh Python process has imported once it has run ``code`` (a
+    user's script starts in a fresh process; an import that costs time shows there)."""
+    probe = f"{code}\nimport sys; print(','.join(m for m in {modules!r} if m in sys.modules))"
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=120, check=True)
+    return [m for m in done.stdout.strip().split(",") if m]

@@ -9,8 +9,6 @@ independent method (scipy's bounded least squares for the obstacle problem, dens
 
 from __future__ import annotations
 
-import subprocess
-import sys
 import warnings
 
 import numpy as np
@@ -34,6 +32,7 @@ from closed_forms import (
     default_closed_form,
     default_scene_with,
     force_rtol,
+    imported_by,
     require,
     small_force,
     spring,
@@ -527,11 +526,7 @@ SOLVER_MODULES = ("cvxpy", "clarabel", "osqp", "qpsolvers", "scs", "ecos", "high
 ])
 def test_importing_contactqp_loads_no_solver_and_no_matplotlib(code):
     """The QP backends are imported on first use and matplotlib only when a chart is drawn."""
-    probe = (f"{code}\nimport sys; print(','.join(sorted(m for m in {SOLVER_MODULES!r} "
-             "if m in sys.modules)))")
-    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                          timeout=120, check=True)
-    assert done.stdout.strip() == ""
+    assert imported_by(code, SOLVER_MODULES) == []
 
 
 # imported at the first solve that needs them, not at start-up: scipy.optimize (with
@@ -550,11 +545,7 @@ HEAVY_AT_STARTUP = ("scipy.optimize", "scipy.special", "scipy.linalg", "scipy.sp
 def test_starting_contactqp_imports_numpy_and_scipy_sparse_only(code):
     """Start-up costs what numpy and scipy.sparse cost: the rest of scipy comes with the first
     solve that uses it (that a solve then works: the test above)."""
-    probe = (f"{code}\nimport sys; print(','.join(sorted(m for m in {HEAVY_AT_STARTUP!r} "
-             "if m in sys.modules)))")
-    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                          timeout=120, check=True)
-    assert done.stdout.strip() == ""
+    assert imported_by(code, HEAVY_AT_STARTUP) == []
 
 
 @pytest.mark.parametrize("method", ["lagrange", "penalty", "augmented", "qp", "lemke", "pgs",
