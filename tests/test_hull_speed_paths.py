@@ -13,7 +13,7 @@ import pytest
 
 import contactqp
 from contactqp import Bar, DistributedLoad, Load, Scene, Support, Wall
-from contactqp.methods import hull
+from contactqp.methods import hull, minorant
 from contactqp.model import spread
 from contactqp.model.chain import scene_model
 from contactqp.reference import reference
@@ -127,13 +127,9 @@ def test_stretches_in_two_bars_with_no_held_node_between():
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("dropped", [0.0, 0.001, 0.3, 0.9])
 def test_the_kept_points_slopes_are_their_own_division_bit_for_bit(seed, dropped):
-    """The minorant's slopes between kept points (a point's step where its next point is kept,
-    worked out again only across the dropped ones) are, to the last bit, the division
-    diff(y[kept]) / diff(x[kept]) over the kept points gathered; and the corners and slopes
-    of the hull are those of the gathered points' own hull (the view of a run of consecutive
-    points read as the gather of it)."""
-    from contactqp.methods import minorant
-
+    """The minorant's slopes between kept points (a point's step where its next point is
+    kept, worked out again only across the dropped ones) are, to the last bit, the division
+    diff(y[kept]) / diff(x[kept]) over the kept points gathered."""
     rng = np.random.default_rng(seed)
     n = 2000
     x = np.cumsum(rng.uniform(1e-3, 1.0, n))
@@ -144,8 +140,27 @@ def test_the_kept_points_slopes_are_their_own_division_bit_for_bit(seed, dropped
     step = np.diff(y) / np.diff(x)
     expected = np.diff(y[points]) / np.diff(x[points])
     assert minorant._kept_slopes(x, y, step, kept).tobytes() == expected.tobytes()
-    # a convex curve with a few dents: one pruning pass, then the runs joined by tangents
-    curve = (x - x.mean()) ** 2 * 1e-6 + np.where(rng.uniform(size=n) < 0.002, 1.0, 0.0)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_joined_hull_s_slopes_are_its_corners_division_bit_for_bit(seed, monkeypatch):
+    """A convex curve with bumps three points wide: one pruning pass leaves dents, the convex
+    runs are joined by tangents (the path is checked to be taken), and the slopes returned
+    are the division over the joined corners gathered, to the last bit; a run of consecutive
+    corners is read as a view holding the gathered values, any other as the gather."""
+    rng = np.random.default_rng(seed)
+    n = 2000
+    x = np.cumsum(rng.uniform(1e-3, 1.0, n))
+    curve = (x - x.mean()) ** 2 * 1e-6
+    for start in rng.choice(np.arange(10, n - 10), 5, replace=False):
+        curve[start: start + 3] += [0.5, 1.0, 0.7]
+    joins = []
+    join = minorant._join_convex_runs
+    monkeypatch.setattr(minorant, "_join_convex_runs", lambda *a: joins.append(1) or join(*a))
     corners, slope = minorant._hull_corners(x, curve)
+    assert joins and 2 * corners.size >= n  # the joined path, slopes from the kept steps
     assert slope.tobytes() == (np.diff(curve[corners]) / np.diff(x[corners])).tobytes()
-    assert minorant._read(x, corners[5:40]).tobytes() == x[corners[5:40]].tobytes()
+    run = np.arange(100, 140)
+    view = minorant._read(x, run)
+    assert view.base is not None and view.tobytes() == x[run].tobytes()
+    assert minorant._read(x, corners).tobytes() == x[corners].tobytes()

@@ -67,7 +67,9 @@ def solve_problem(problem: Problem, method: str = "lagrange", contact: str = "in
     start = time.perf_counter()
     model = build_sparse_model(problem)
     built = time.perf_counter()
-    held = contact == "equality" and not problem.equality.all()  # rows held as never checked
+    # every row held on its gap: a conflict the Problem, checking its rows by their kinds, did
+    # not look for
+    held = contact == "equality" and not problem.equality.all()
     try:
         solution = solve_model(model, method, contact, options)
     except SolverError:
