@@ -72,7 +72,7 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
         kept_external = external.copy()
         kept_external[contact_part][~pushing[entry]] = 0.0
         outside = Running.of(layout.n_nodes, nodes, kept_external)
-    force_error, sway = propagate(layout, held, links, outside)
+    force_error, sway, jumps = propagate(layout, held, links, outside)
     pair = 0.0 if equality else opposed_forces(layout, lam)
     # an open row moved onto its wall (it penetrates) is held too, with no force of its own
     # closing a bar contact's gap δ moves each end by its share, δ·s/s_end (a wall's node: δ)
@@ -96,10 +96,12 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     rerouted = 0.0 if equality else rerouted_forces(layout, lam, pen, pushing, u, U)
     force_bound = max(force_error, largest(moved)) + gap_force + pair + closing + rerouted
     # a pushing bar contact is held at both ends above, but the two ends move together: the
-    # force error it carries moves them by that force over the stiffness both bars give them
-    # there, and its bars' forces and displacements by up to as much again (measured: without
-    # the factor 2, up to 1.4 times the bound on random scenes of several bars)
-    give = _contact_give(layout, held, pushing)
+    # force errors at its two ends move them by their sum over the stiffness both bars give
+    # them there, and its bars' displacements by up to as much again (measured when the
+    # forces took the same factor, before their own term below: without it, up to 1.4 times
+    # the bound on random scenes of several bars)
+    ends, moving, group = _pushing_pairs(layout, pushing)
+    give = _contact_give(layout, held, ends, moving)
     coupled = 2.0 if give > 0.0 else 1.0
     # the forces moved off every other row all reach the held pair through the runs: their
     # sum, not the largest, is what can move it (measured: Clarabel, three bars tied by a
@@ -113,7 +115,15 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     carried = (force_error + float(np.abs(moved).sum()) + gap_force + pair + closing + rerouted
                + r_max)
     displacement_bound = coupled * (sway + gap_move) + carried * give
-    force_bound *= coupled
+    # ... and what moves the pair, the errors at both its ends, goes on through the runs into
+    # the held nodes beside it, in parts of at most the whole (the springs between held nodes
+    # share a load, none pulls against it); a pair beside another pair moves it too, so a
+    # held node or a row takes at most its own error and both ends' errors of every pair in
+    # its group of bars (measured: ECOS, random_scene 78 of seed 2026, a wall beside a
+    # pushing contact 5.3e-3 N off, its own error 2.1e-3 N and the contact's ends' 2.2e-3 and
+    # 0.9e-3 N, against 5.0e-3 N from twice the largest error)
+    force_bound += _through_pairs(held, jumps, ends[moving], group,
+                                  gap_force + pair + closing + rerouted)
     # and the answer itself is only stored to a few units of round-off: a force of 2e8 N from
     # a press fit on a stiff element is one float step (3e-8 N) from any other
     force_bound += ROUND_OFF * max(largest(lam), largest(links) if links_size is None
@@ -188,28 +198,62 @@ def _release(layout: Layout, held: np.ndarray, pushing: np.ndarray, lam: np.ndar
         return float(np.max(force_bound / stiffness))
 
 
-def _contact_give(layout: Layout, held: np.ndarray, pushing: np.ndarray) -> float:
-    """The largest 1/(s_a + s_b) (m/N) over the pushing bar contacts: how far a unit force
-    error moves the two ends of a contact together, s_a and s_b the stiffness each end sees
-    in its own bar with the held nodes fixed, but the ends of every pushing bar contact (a
-    supported end does not move). Another contact's ends are not fixed: they move with it,
-    and where a stiff stretch of bar joins two contacts the pairs move as one (measured: the
-    augmented method on a random scene, two contacts joined by elements of 1e10 N/m, the four
-    ends moved 4.6e-13 m together against a bound of 1.2e-15 m that held each pair by the
-    other's ends)."""
+def _pushing_pairs(layout: Layout, pushing: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pushing bar contacts: their two ends (node numbers, one row each), whether each can
+    move (neither end a support: a supported end does not move), and the group of bars each
+    that can move is in, bars joined by those (one label for each of them)."""
     n_walls = len(layout.scene.walls)
-    pairs = [np.array([layout.node(c.bar_a, c.node_a), layout.node(c.bar_b, c.node_b)])
-             for i, c in enumerate(layout.scene.contacts) if pushing[n_walls + i]]
-    if not pairs:
+    contacts = [c for i, c in enumerate(layout.scene.contacts) if pushing[n_walls + i]]
+    if not contacts:  # walls alone: nothing made over the chain
+        return np.zeros((0, 2), dtype=np.intp), np.zeros(0, dtype=bool), np.zeros(0, np.intp)
+    ends = np.array([[layout.node(c.bar_a, c.node_a), layout.node(c.bar_b, c.node_b)]
+                     for c in contacts], dtype=np.intp)
+    moving = ~in_set(layout.n_nodes, ends, layout.support_nodes).any(axis=1)
+    bars = np.array([[c.bar_a, c.bar_b] for c in contacts], dtype=np.intp)
+    return ends, moving, _groups(len(layout.scene.bars), bars[moving])
+
+
+def _groups(bars: int, joins: np.ndarray) -> np.ndarray:
+    """The group of each of ``joins`` (pairs of bars, one row each): bars joined by them."""
+    if len(joins) <= 1:
+        return np.zeros(len(joins), dtype=np.intp)
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    graph = sp.coo_array((np.ones(len(joins)), (joins[:, 0], joins[:, 1])), shape=(bars, bars))
+    return connected_components(graph, directed=False)[1][joins[:, 0]]
+
+
+def _contact_give(layout: Layout, held: np.ndarray, ends: np.ndarray, moving: np.ndarray
+                  ) -> float:
+    """The largest 1/(s_a + s_b) (m/N) over the pushing bar contacts that can move (``ends``
+    and ``moving`` of :func:`_pushing_pairs`): how far a unit force error moves the two ends
+    of a contact together, s_a and s_b the stiffness each end sees in its own bar with the
+    held nodes fixed, but the ends of every pushing bar contact. Another contact's ends are
+    not fixed: they move with it, and where a stiff stretch of bar joins two contacts the
+    pairs move as one (measured: the augmented method on a random scene, two contacts joined
+    by elements of 1e10 N/m, the four ends moved 4.6e-13 m together against a bound of
+    1.2e-15 m that held each pair by the other's ends)."""
+    if not moving.any():
         return 0.0
-    others = np.setdiff1d(held, np.concatenate(pairs))
+    others = np.setdiff1d(held, ends)
     give = 0.0
-    for ends in pairs:
-        if np.isin(ends, layout.support_nodes).any():
-            continue
-        stiffness = float(seen_stiffness(layout, others, ends).sum())
+    for pair in ends[moving]:
+        stiffness = float(seen_stiffness(layout, others, pair).sum())
         give = max(give, 1.0 / stiffness if stiffness > 0.0 else np.inf)  # 0: nothing holds it
     return give
+
+
+def _through_pairs(held: np.ndarray, jumps: np.ndarray, ends: np.ndarray, group: np.ndarray,
+                   moves: float) -> float:
+    """The most force that moving bar contacts pass on to a held node or a row (N): in one
+    group of bars, the errors at both ends of every such contact (``jumps`` at the ``held``
+    nodes, and what ``moves``, the other terms of the bound, add at a node)."""
+    if not ends.size:
+        return 0.0
+    at_ends = np.abs(jumps[np.searchsorted(held, ends)])
+    return float(np.bincount(group, at_ends.sum(axis=1) + 2.0 * moves).max())
 
 
 def unpinned_bar(layout: Layout, pushing: np.ndarray) -> int | None:

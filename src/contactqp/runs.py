@@ -203,9 +203,10 @@ class Running:
 
 
 def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
-              outside: Running) -> tuple[float, float]:
+              outside: Running) -> tuple[float, float, np.ndarray]:
     """What the imbalance of an answer does with the ``held`` nodes (sorted) fixed: (the
-    largest force error at a held node, N; the largest displacement error, m).
+    largest force error at a held node, N; the largest displacement error, m; the force
+    error at each held node, N).
 
     r_j, the residual of cut j (element force from u against ``outside``, the running sum of
     the outside forces over the nodes up to the cut), is a load pattern: its jumps are the
@@ -217,9 +218,9 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
     held node's force error is the jump of c across it."""
     element, compliance = layout.elements
     if element.size == 0:
-        return 0.0, 0.0
+        return 0.0, 0.0, np.zeros(held.size)
     if held.size == 0:  # bars with no support, and nothing in the answer holds them
-        return np.inf, np.inf
+        return np.inf, np.inf, np.zeros(0)
     run = runs(layout, held)
     if run.swaying.size <= max(FEW_SWAYING, run.starts.size // LONG_RUNS):
         return _few_swaying(layout, held, links, outside, run)
@@ -229,7 +230,8 @@ def propagate(layout: Layout, held: np.ndarray, links: np.ndarray,
     c_run = _run_levels(r, compliance, outside, run)
     sway = _sway(r, compliance, c_run, run)  # r reused there
     del r
-    return _held_jumps(held, c_run, outside, run), sway
+    jumps = _held_jumps(held, c_run, outside, run)
+    return largest(jumps), sway, jumps
 
 
 # The helpers below work in place and drop what they no longer read: every array of a chain's
@@ -261,7 +263,7 @@ def _free_end_levels(outside: Running, run: Runs, index: Any = slice(None)) -> n
 
 
 def _few_swaying(layout: Layout, held: np.ndarray, links: np.ndarray, outside: Running,
-                 run: Runs) -> tuple[float, float]:
+                 run: Runs) -> tuple[float, float, np.ndarray]:
     """:func:`propagate` where few runs can sway (a pressed patch: 9.5·10⁴ runs, one long;
     one wall on a bar: one run), run by run over those alone. A run of one element held at
     both ends has c = r there, the mean of one value, and moves no node: r at each run's
@@ -282,7 +284,8 @@ def _few_swaying(layout: Layout, held: np.ndarray, links: np.ndarray, outside: R
             c = float(np.dot(r, compliance[a:b])) / float(run.compliance[i])
         c_run[i] = c
         sway = max(sway, _run_sway(r, compliance[a:b], c, left))
-    return _held_jumps(held, c_run, outside, run), sway
+    jumps = _held_jumps(held, c_run, outside, run)
+    return largest(jumps), sway, jumps
 
 
 def _run_sway(r: np.ndarray, compliance: np.ndarray, c: float, left_held: bool) -> float:
@@ -297,8 +300,9 @@ def _run_sway(r: np.ndarray, compliance: np.ndarray, c: float, left_held: bool) 
     return max(abs(tail - top), abs(tail - bottom), abs(tail))
 
 
-def _held_jumps(held: np.ndarray, c_run: np.ndarray, outside: Running, run: Runs) -> float:
-    """The largest force error at a held node (:func:`propagate`): the jump of c between the
+def _held_jumps(held: np.ndarray, c_run: np.ndarray, outside: Running, run: Runs
+                ) -> np.ndarray:
+    """The force error at each held node (:func:`propagate`): the jump of c between the
     elements on either side of it (past a bar's end, the cut residual there)."""
     c_left, c_right = c_run[run.run_of[: held.size]], c_run[run.run_of[held.size:]]
     if run.at_first.size:  # no run before a bar's first node: the cut residual before it
@@ -306,7 +310,7 @@ def _held_jumps(held: np.ndarray, c_run: np.ndarray, outside: Running, run: Runs
         c_left[run.at_first] = np.where(start > 0, outside.at(np.maximum(start - 1, 0)), 0.0)
     if run.at_last.size:  # ... and past its last
         c_right[run.at_last] = outside.at(run.held_end[run.at_last])
-    return largest(np.subtract(c_left, c_right, out=c_left))
+    return np.subtract(c_left, c_right, out=c_left)
 
 
 def _sway(r: np.ndarray, compliance: np.ndarray, c_run: np.ndarray, run: Runs) -> float:
