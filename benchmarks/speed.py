@@ -4,7 +4,8 @@
                       wall; floor: one banded factor-and-solve of K (benchmarks/cases.floor)
     condensed 10⁶     the same scene by Lagrange, formulation="condensed"
     walls 10⁵ warm    solve(scene) again on a scene of 10⁵ walls (a two-sided channel, a
-                      pressed flat patch; contactqp.builders) whose model is built once
+                      pressed flat patch; contactqp.builders) whose model is built once;
+                      again in a process that solves that scene alone (a subprocess)
     walls 10⁵ first   building that scene and its first solve, timed in this process and, in
                       a fresh process (a subprocess), with the imports the first solve needs
     check / method    the check's time over the method's, from the Results' own timings
@@ -23,7 +24,9 @@ faults, against 0.03 ms reused), so holding every Result of a 10⁶-element run 
 97 ms instead of 35-48 ms. How many pages a call meets afresh also depends on what the
 process allocated before it (glibc returns the top of its heap to the OS past a threshold
 that grows with the largest block freed), so the same call took 0-4 000 faults from one
-process to the next; the fault count says how much of a row that is. The first-solve rows
+process to the next; the fault count says how much of a row that is. The warm rows of this
+process follow the 10⁶-element rows, whose 8 MB blocks raise that threshold; each walls row
+is timed again in a process of its own, which meets its pages afresh. The first-solve rows
 pay those pages, as a user's first solve does; the fresh process counts its page faults.
 Writes speed.json.
 """
@@ -64,6 +67,32 @@ faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults
 assert result.verified, result.message
 print(imported - start, built - imported, done - built, faults)
 """
+
+
+WARM_SOLVE = """
+import resource, statistics, time
+import contactqp
+from contactqp.builders import {builder}
+scene = {builder}({size})
+result = contactqp.solve(scene)  # untimed, as median_time's first call
+times, faults = [], resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+for _ in range({repeats}):
+    start = time.perf_counter()
+    result = contactqp.solve(scene)
+    times.append(time.perf_counter() - start)
+faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults
+assert result.verified, result.message
+print(statistics.median(times), faults / {repeats})
+"""
+
+
+def _warm_alone(builder: str, size: int, repeats: int) -> tuple[float, float]:
+    """(the median warm re-solve, its page faults per call) in a process that solves this
+    scene alone: what a user's loop meets where nothing larger was freed before it."""
+    code = WARM_SOLVE.format(builder=builder, size=size, repeats=repeats)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    return float(out[0]), float(out[1])
 
 
 def _split(result: contactqp.Result | _Timed) -> dict[str, float]:
@@ -155,6 +184,9 @@ def many_walls(quick: bool) -> list[dict]:
         rows.append(_row(f"floor: pbsv on K, {scene.name}", base, base, "", 1.0))
         seconds, result = _timed_solve(scene, repeats)
         rows.append(_row(f"{scene.name}, warm re-solve", seconds, base, "floor", 12.0, result))
+        seconds, faults = _warm_alone(builder.__name__, size, repeats)
+        rows.append(_row(f"{scene.name}, warm re-solve (own process)", seconds, base, "floor",
+                         12.0, faults_per_call=faults))
         start = time.perf_counter()
         fresh = builder(size)
         made = time.perf_counter()

@@ -406,6 +406,9 @@ SPEED_ROWS = {  # the table's measure -> the runs' rows it quotes ("/" between t
     "condensed Lagrange, 10⁶ elements": ["condensed lagrange, 1000000 elements"],
     "10⁵ walls, warm re-solve (channel / flat patch)": [
         "channel (100000 walls), warm re-solve", "flat patch (100000 walls), warm re-solve"],
+    "... the same in a process of its own (channel / flat patch)": [
+        "channel (100000 walls), warm re-solve (own process)",
+        "flat patch (100000 walls), warm re-solve (own process)"],
     "10⁵ walls, first solve in the process (channel / patch)": [
         "channel (100000 walls), first solve (this process)",
         "flat patch (100000 walls), first solve (this process)"],
