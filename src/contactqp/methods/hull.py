@@ -18,16 +18,15 @@ wall's force is the kink of w there. The same equations as the textbook loop
 - the stretch is then settled within the same step: between its held nodes (old and new) u
   follows from statics alone, so where it now passes the other side's walls, that side's
   hull walls are added in each such sub-stretch, and so on until nothing in the stretch is
-  passed (a channel with walls on both sides took a step per side and swing: 7 steps on
-  ``channel(10**5)``, 2 now). The set the loop ends with is the same as when each step
-  settled one side, but for walls that touch with no force (held or not, either is exact).
+  passed. The set the loop ends with is the same as when each step settled one side, but
+  for walls that touch with no force (held or not, either is exact).
 
 The textbook loop adds every passed wall, so its active set crosses a contact patch a few
 nodes per step (steps grow with the mesh); the hull adds a patch's walls in one step. Measured
 on the builders' obstacle, channel and flat patch: 2 steps at every size from 10³ to 10⁶
-walls (``benchmarks/run.py --cases contacts``; the channel took 6-7 before a step settled both
-sides of a stretch). A set that comes back or more than ``max_iterations`` steps
-hands over to the textbook loop from the set reached (reported in the Solution's info).
+walls (``benchmarks/run.py --cases contacts``; the channel took 6-7 when a step settled one
+side). A set that comes back or more than ``max_iterations`` steps hands over to the
+textbook loop from the set reached (reported in the Solution's info).
 """
 
 from __future__ import annotations
@@ -62,7 +61,6 @@ class WallsOnChain:
 
     def __init__(self, model: Model, load_factor: float = 1.0) -> None:
         layout = model.layout
-        n = layout.n_nodes
         self.model = model
         self.phi = layout.chained_compliance  # φ along the whole chain, increasing
         self.bar = layout.node_bar
@@ -79,10 +77,8 @@ class WallsOnChain:
         # there only (one wall on 10⁶ nodes: no pass over the chain per side and step)
         self.wall_nodes = layout.wall_nodes_by_side
         self._wall_gaps: dict[int, np.ndarray] = {}
-        self.n = n
-        self.n_rows = model.n_contacts
-        P = scaled(layout.nodal_loads)
-        self.loads = P
+        self.n, self.n_rows = layout.n_nodes, model.n_contacts
+        self.loads = P = scaled(layout.nodal_loads)
         self.running_load = scaled(layout.running_load)  # S_j = Σ_(i<=j) P_i
         self.compliance_load = scaled(layout.compliance_load)  # c_j S_j per link
         # the sides that have walls: a side without one is never passed
@@ -391,14 +387,11 @@ def _solution(chain: WallsOnChain, u: np.ndarray, nodes: np.ndarray, force: np.n
         mine = held[side][nodes]
         contact_force[chain.owner[side][nodes[mine]]] = force[mine]
     free = chain.model.free
-    u_nodes = None
-    if free.size and free[-1] - free[0] + 1 == free.size:  # the free nodes are one range
-        if u is chain.u_free:  # no wall held: the Solution's own copy
-            u = u.copy()
-        u_free = u[free[0]: free[-1] + 1]
-        u[chain.model.layout.support_nodes] = 0.0  # outside that range: u as a Result has it
-        u_nodes = u
-    else:
-        u_free = u[free]
-    return Solution(u_free, contact_force, solver="lagrange", iterations=steps,
-                    info={"active_set": "hull"}, u_nodes=u_nodes)
+    if not (free.size and free[-1] - free[0] + 1 == free.size):
+        return Solution(u[free], contact_force, solver="lagrange", iterations=steps,
+                        info={"active_set": "hull"})
+    # the free nodes are one range: u over every node is the Solution's, as a Result has it
+    u = u.copy() if u is chain.u_free else u  # no wall held: its own copy
+    u[chain.model.layout.support_nodes] = 0.0  # outside that range
+    return Solution(u[free[0]: free[-1] + 1], contact_force, solver="lagrange",
+                    iterations=steps, info={"active_set": "hull"}, u_nodes=u)
