@@ -56,10 +56,25 @@ def banded_order(C: sp.csr_array, n: int) -> np.ndarray:
 
 def solve_saddle_point(K: sp.sparray, P: np.ndarray, C: sp.csr_array,
                        g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Solve [[K, Cᵀ], [C, 0]] [D; λ] = [P; g] in one sparse solve; returns (D, λ)."""
+    """Solve [[K, Cᵀ], [C, 0]] [D; λ] = [P; g] in one sparse solve; returns (D, λ).
+
+    The rows of C (and g) are solved scaled by the power of 2 nearest above K's largest
+    diagonal entry, and λ scaled back: the same system exactly, but its LU pivots weigh the
+    contact rows as K's own (measured: a random scene of two bars with elements of 1.7e5 to
+    2.8e12 N/m, a wall and a bar contact active, unscaled: a wall's force 44 N off of 35 kN and
+    its node 1.2e-9 m off its gap; scaled: 3e-5 N and at the gap)."""
     n = K.shape[0]
-    x = linalg.solve(saddle_point_system(K, C), np.concatenate((P, g)), order=banded_order(C, n))
-    return x[:n], x[n:]
+    scale = row_scale(K)
+    x = linalg.solve(saddle_point_system(K, C * scale), np.concatenate((P, g * scale)),
+                     order=banded_order(C, n))
+    return x[:n], x[n:] * scale
+
+
+def row_scale(K: sp.sparray) -> float:
+    """The power of 2 nearest above K's largest diagonal entry (1 for an empty or zero K): the
+    contact rows' scale in a saddle-point solve (scaling by it is exact)."""
+    top = float(np.abs(K.diagonal()).max(initial=0.0))
+    return float(np.ldexp(1.0, np.frexp(top)[1])) if 0.0 < top < np.inf else 1.0
 
 
 def solve_strain_saddle_point(model: Model, active: np.ndarray) -> tuple[np.ndarray, np.ndarray,
