@@ -69,7 +69,7 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     n_loads = external.size - row_nodes.size - layout.support_nodes.size
     # the contacts of the nearby scene carry only the rest
     contact_part = slice(n_loads, n_loads + row_nodes.size)
-    if np.any(external[contact_part][~pushing[entry]]):
+    if np.any(moved):  # an open row has a force: its entries there (−C·λ, C = ±1) are not 0
         kept_external = external.copy()
         kept_external[contact_part][~pushing[entry]] = 0.0
         outside = Running.of(layout.n_nodes, nodes, kept_external)
@@ -77,10 +77,14 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     pair = 0.0 if equality else opposed_forces(layout, lam)
     # an open row moved onto its wall (it penetrates) is held too, with no force of its own
     # closing a bar contact's gap δ moves each end by its share, δ·s/s_end (a wall's node: δ)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        share = np.where(np.isinf(s_ends), 0.0,  # a rigid end does not move
-                         np.where(s_ends > 0.0, s[entry] / s_ends, 1.0))
-    end_moves = np.where(delta[entry] > 0.0, delta[entry] * np.minimum(share, 1.0), 0.0)
+    if s_ends is s:  # walls alone: each row is its node, its share 1 (0 where rigid)
+        end_moves = np.where(delta > 0.0, delta, 0.0)
+        end_moves[np.isinf(s)] = 0.0
+    else:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = np.where(np.isinf(s_ends), 0.0,  # a rigid end does not move
+                             np.where(s_ends > 0.0, s[entry] / s_ends, 1.0))
+        end_moves = np.where(delta[entry] > 0.0, delta[entry] * np.minimum(share, 1.0), 0.0)
     gap_force, gap_move, moves = gap_moves(layout, held, row_nodes, end_moves, pushing)
     # gap⁺ = max(−pen, 0), in delta's array (read no more)
     standing = None if equality else np.maximum(np.negative(pen, out=delta), 0.0, out=delta)
@@ -144,7 +148,7 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
         natural = np.minimum(np.maximum(lam, 0.0), np.multiply(standing, s, out=standing),
                              out=standing)
         residuals["complementarity"] = max(largest(natural), pair) / F
-        residuals["sign"] = float(np.max(-lam, initial=0.0)) / F
+        residuals["sign"] = largest_pull(lam) / F
     residuals["force"] = force_bound / F
     residuals["displacement"] = displacement_bound / U
     return Bounds(residuals, force_bound, displacement_bound, pen)
@@ -197,6 +201,12 @@ def _release(layout: Layout, held: np.ndarray, pushing: np.ndarray, lam: np.ndar
     stiffness = row_stiffness(layout, still, sure)[unsure]
     with np.errstate(divide="ignore"):
         return float(np.max(force_bound / stiffness))
+
+
+def largest_pull(lam: np.ndarray) -> float:
+    """How hard the hardest-pulling contact pulls (N; 0 when none pulls): max(−λ, 0), without
+    an array of −λ."""
+    return max(0.0, -float(np.min(lam, initial=0.0)))
 
 
 def unpinned_bar(layout: Layout, pushing: np.ndarray) -> int | None:

@@ -47,7 +47,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from contactqp.bounds import error_bounds
+from contactqp.bounds import error_bounds, largest_pull
 from contactqp.errors import OptionError
 from contactqp.model import (
     Layout,
@@ -126,9 +126,15 @@ def external_forces(layout: Layout, contact_force: np.ndarray,
     loads = layout.load_entries[1]  # what depends on the loads alone: once per scene
     lam = np.asarray(contact_force, dtype=float).reshape(-1)
     all_nodes = layout.external_nodes
-    forces = np.concatenate((loads, -values * lam[layout.by_entry] if lam.size
-                             else np.zeros(rows.size),
-                             np.asarray(reactions, dtype=float).reshape(-1)))
+    reactions = np.asarray(reactions, dtype=float).reshape(-1)
+    forces = np.empty(loads.size + rows.size + reactions.size)  # filled in place, part by part
+    forces[:loads.size] = loads
+    contacts = forces[loads.size: loads.size + rows.size]
+    if lam.size:
+        np.negative(np.multiply(values, lam[layout.by_entry], out=contacts), out=contacts)
+    else:
+        contacts[:] = 0.0
+    forces[loads.size + rows.size:] = reactions
     return all_nodes, forces, int(loads.size)
 
 
@@ -209,7 +215,7 @@ def check(model: Model | Scene, u: np.ndarray, contact_force: np.ndarray, reacti
     residuals["natural_map"] = (
         None if contact == "equality" or model.floating
         else _natural_residual(model, lam, bounds.penetration) if natural else math.nan)
-    pulling = float(np.max(-lam, initial=0.0)) / F
+    pulling = largest_pull(lam) / F
     physical = pulling <= tolerances.sign
     notes = list(failures)
     if not physical:

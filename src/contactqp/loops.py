@@ -19,17 +19,19 @@ def opposed_forces(layout: Layout, lam: np.ndarray) -> float:
     that moves nothing and is wrong in every row it is on (where the gaps leave the nodes one
     position, the rows alone cannot tell how the force splits; the exact answer has one row of
     each loop free of it)."""
-    force = np.maximum(lam, 0.0)
     up_nodes, up_rows, down_nodes, down_rows = layout.opposed_entries  # places, not nodes
     common = 0.0
-    if up_nodes.size:
+    if up_nodes.size:  # λ₊ of the rows read (no array of λ₊ over every row)
         size = int(up_nodes.max()) + 1  # every such node has entries both ways
-        plus, minus = _per_place(up_nodes, force[up_rows], size), _per_place(
-            down_nodes, force[down_rows], size)
+        up, down = lam[up_rows], lam[down_rows]
+        plus = _per_place(up_nodes, np.maximum(up, 0.0, out=up), size)
+        minus = _per_place(down_nodes, np.maximum(down, 0.0, out=down), size)
         common = largest(np.minimum(plus, minus))
     # a loop whose gaps sum to zero (Layout.tight_cycles) is one of the loops that
     # round_the_loops finds: its weakest row carries at least that loop's smallest force
-    return max(common, round_the_loops(layout, force))
+    if not layout.scene.contacts:  # walls alone: no loop but a node's two sides
+        return common
+    return max(common, round_the_loops(layout, np.maximum(lam, 0.0)))
 
 
 def _per_place(places: np.ndarray, forces: np.ndarray, size: int) -> np.ndarray:
