@@ -33,6 +33,7 @@ SCENES = Path(__file__).parent / "scenes"
 # the reference is exact to ~1e-13 of F and U, and the bounds round at ~1e-14 (as in
 # test_guarantee.py)
 ROUND_OFF = 1e-12
+BOUND_FACTOR = 2.0  # as test_guarantee.py: within the bounds where a row may change sides
 
 
 def random_cases(rng: np.random.Generator, scene: contactqp.Scene,
@@ -53,13 +54,13 @@ def quietly(function, *args, **kwargs):
 
 
 def assert_right(u, force, F, U, force_bound, displacement_bound, exact, context) -> None:
-    """Within the guarantee, and within the bounds."""
+    """Within the guarantee, and within the bounds (BOUND_FACTOR)."""
     force_error = float(np.abs(force - exact.contact_force).max(initial=0.0))
     displacement_error = float(np.abs(u - exact.displacement).max())
     assert force_error <= contactqp.GUARANTEE[0] * F, context
     assert displacement_error <= contactqp.GUARANTEE[1] * U, context
-    assert force_error <= force_bound + ROUND_OFF * F, context
-    assert displacement_error <= displacement_bound + ROUND_OFF * U, context
+    assert force_error <= BOUND_FACTOR * force_bound + ROUND_OFF * F, context
+    assert displacement_error <= BOUND_FACTOR * displacement_bound + ROUND_OFF * U, context
 
 
 @settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])

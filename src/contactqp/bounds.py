@@ -108,27 +108,31 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     ends, moving, group = pushing_pairs(layout, pushing)
     give = contact_give(layout, held, ends, moving)
     coupled = 2.0 if give > 0.0 else 1.0
-    # the forces moved off every other row all reach the held pair through the runs: their
-    # sum, not the largest, is what can move it (measured: Clarabel, three bars tied by a
-    # contact, four rows ~100 N off each; the pair moved 2.7e-4 m, the largest force alone
-    # bounded 2.0e-4 m, and the answer was verified 1.09e-5·U off)
+    # what moves a pair is the errors at both its ends, and a pair beside another pair moves
+    # it too: in a group of bars they join, the errors at both ends of every such pair go on
+    # through the runs into the held nodes beside them, in parts of at most the whole (the
+    # springs between held nodes share a load, none pulls against it), so a held node or a
+    # row takes at most its own error and all of those (measured: ECOS, random_scene 78 of
+    # seed 2026, a wall beside a pushing contact 5.3e-3 N off, its own error 2.1e-3 N and the
+    # contact's ends' 2.2e-3 and 0.9e-3 N, against 5.0e-3 N from twice the largest error)
+    through = through_pairs(held, jumps, ends[moving], group,
+                            gap_force + pair + closing + rerouted)
+    force_bound += through
+    # ... and that sum, not the largest error, moves the group (measured: three bars, two
+    # contacts joined by a stiff stretch, each end e off: the group moved twice the bound
+    # that the largest error gave); the forces moved off every other row all reach the held
+    # pair through the runs: their sum, not the largest, is what can move it too (measured:
+    # Clarabel, three bars tied by a contact, four rows ~100 N off each; the pair moved
+    # 2.7e-4 m, the largest force alone bounded 2.0e-4 m, and the answer was verified
+    # 1.09e-5·U off)
     # ... and so does what equilibrium leaves over in the elements between them and the
     # next held node, r_j beside c (propagate: an element's force error is c − r_j; measured:
     # the augmented method, a bar held by contact alone pressing on a free bar's node, 0.0096 N
     # off at the contact and 0.016 N left over along three elements, moved the pair 1.04e-9 m
     # against a bound of 6.2e-10 m from the contact's error alone)
-    carried = (force_error + float(np.abs(moved).sum()) + gap_force + pair + closing + rerouted
-               + r_max)
+    carried = (max(force_error, through) + float(np.abs(moved).sum()) + gap_force + pair
+               + closing + rerouted + r_max)
     displacement_bound = coupled * (sway + gap_move) + carried * give
-    # ... and what moves the pair, the errors at both its ends, goes on through the runs into
-    # the held nodes beside it, in parts of at most the whole (the springs between held nodes
-    # share a load, none pulls against it); a pair beside another pair moves it too, so a
-    # held node or a row takes at most its own error and both ends' errors of every pair in
-    # its group of bars (measured: ECOS, random_scene 78 of seed 2026, a wall beside a
-    # pushing contact 5.3e-3 N off, its own error 2.1e-3 N and the contact's ends' 2.2e-3 and
-    # 0.9e-3 N, against 5.0e-3 N from twice the largest error)
-    force_bound += through_pairs(held, jumps, ends[moving], group,
-                                 gap_force + pair + closing + rerouted)
     # and the answer itself is only stored to a few units of round-off: a force of 2e8 N from
     # a press fit on a stiff element is one float step (3e-8 N) from any other
     force_bound += ROUND_OFF * max(largest(lam), largest(links) if links_size is None
