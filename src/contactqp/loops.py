@@ -29,9 +29,7 @@ def opposed_forces(layout: Layout, lam: np.ndarray) -> float:
         common = largest(np.minimum(plus, minus))
     # a loop whose gaps sum to zero (Layout.tight_cycles) is one of the loops that
     # round_the_loops finds: its weakest row carries at least that loop's smallest force
-    if not layout.scene.contacts:  # walls alone: no loop but a node's two sides
-        return common
-    return max(common, round_the_loops(layout, np.maximum(lam, 0.0)))
+    return max(common, round_the_loops(layout, lam))
 
 
 def _per_place(places: np.ndarray, forces: np.ndarray, size: int) -> np.ndarray:
@@ -48,19 +46,21 @@ def _per_place(places: np.ndarray, forces: np.ndarray, size: int) -> np.ndarray:
     return total
 
 
-def round_the_loops(layout: Layout, force: np.ndarray) -> float:
-    """What the pushing rows of an answer can carry round a loop of rows (N): rows that join
-    held nodes, bar contacts among them, into a loop (two ways from a node to the ground, or
-    round bars tied by contacts) split a force among their ways as the answer's own
-    penetrations allow, where the exact answer, its gaps not adding up to zero, leaves one
-    way open. The rows taken strongest first (a spanning forest, supports as the ground): each
-    row that closes a loop is its weakest and carries at most its own force wrongly. Measured:
+def round_the_loops(layout: Layout, lam: np.ndarray) -> float:
+    """What the pushing rows of an answer (forces ``lam``, λ⁺ read) can carry round a loop of
+    rows (N): rows that join held nodes, bar contacts among them, into a loop (two ways from a
+    node to the ground, or round bars tied by contacts) split a force among their ways as the
+    answer's own penetrations allow, where the exact answer, its gaps not adding up to zero,
+    leaves one way open. The rows taken strongest first (a spanning forest, supports as the
+    ground): each row that closes a loop is its weakest and carries at most its own force
+    wrongly. Measured:
     ProxQP, random_scene seed 139, a wall and a bar contact to a second wall 3.4e-10 m apart
     on U = 17 m: 15.3 N on the contact that the exact answer leaves open, verified with a force
     bound of 3.5e-5 N. Scenes without bar contacts have no loop but a node's two sides
     (:func:`opposed_forces`)."""
     if not layout.scene.contacts:
         return 0.0
+    force = np.maximum(lam, 0.0)
     rows, row_nodes, _, gaps = layout.rows
     ground = layout.n_nodes
     ends = np.full((gaps.size, 2), ground)  # a wall's other end is the ground
