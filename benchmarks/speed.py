@@ -89,10 +89,16 @@ print(statistics.median(times), faults / {repeats})
 def _warm_alone(builder: str, size: int, repeats: int) -> tuple[float, float]:
     """(the median warm re-solve, its page faults per call) in a process that solves this
     scene alone: what a user's loop meets where nothing larger was freed before it."""
-    code = WARM_SOLVE.format(builder=builder, size=size, repeats=repeats)
+    seconds, faults = _numbers_of(WARM_SOLVE.format(builder=builder, size=size,
+                                                    repeats=repeats))
+    return seconds, faults
+
+
+def _numbers_of(code: str) -> list[float]:
+    """The numbers a script prints, run in a fresh Python process."""
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
-    return float(out[0]), float(out[1])
+    return [float(number) for number in out]
 
 
 def _split(result: contactqp.Result | _Timed) -> dict[str, float]:
@@ -167,10 +173,7 @@ def long_bar(quick: bool) -> list[dict]:
 
 
 def _fresh_process(builder: str, size: int) -> dict[str, float]:
-    code = FIRST_SOLVE.format(builder=builder, size=size)
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout.split()
-    imported, built, solved, faults = map(float, out)
+    imported, built, solved, faults = _numbers_of(FIRST_SOLVE.format(builder=builder, size=size))
     return {"import": imported, "scene": built, "first_solve": solved, "page_faults": faults}
 
 

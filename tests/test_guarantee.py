@@ -255,6 +255,16 @@ def test_an_open_contact_tied_across_a_stiff_element_sees_that_element():
             result.force_scale)  # flagged, and rightly
 
 
+def checked_nearby(scene: contactqp.Scene, extra: tuple[contactqp.Load, ...]):
+    """(the check, u, λ) of the exact answer of ``scene`` with the loads ``extra`` added (a
+    nearby scene), read as an answer to ``scene`` itself (the reactions from equilibrium)."""
+    nearby = reference(replace(scene, loads=scene.loads + extra))
+    u, lam = np.array(nearby.displacement), np.array(nearby.contact_force)
+    layout = scene.layout
+    reactions = support_reactions(layout, link_forces(layout, element_forces(layout, u)), lam)
+    return contactqp.check(scene, u, lam, reactions, "inequality"), u, lam
+
+
 @pytest.mark.parametrize("signs", list(itertools.product((1.0, -1.0), repeat=3)))
 def test_a_wall_beside_a_pushing_contact_takes_the_errors_at_both_its_ends(signs):
     """A random scene (benchmarks/guarantee.py, seed 2026, scene 78): bar 1 is pushed onto a
@@ -274,11 +284,7 @@ def test_a_wall_beside_a_pushing_contact_takes_the_errors_at_both_its_ends(signs
     # past bar 0's end of the contact, past bar 1's end, and at the wall
     extra = tuple(contactqp.Load(node=node, force=sign * e, bar=bar)
                   for (bar, node), sign in zip(((0, 5), (1, 3), (1, 1)), signs))
-    nearby = reference(replace(scene, loads=scene.loads + extra))
-    u, lam = np.array(nearby.displacement), np.array(nearby.contact_force)
-    layout = scene.layout
-    reactions = support_reactions(layout, link_forces(layout, element_forces(layout, u)), lam)
-    found = contactqp.check(scene, u, lam, reactions, "inequality")
+    found, _, lam = checked_nearby(scene, extra)
     error = float(np.abs(lam - exact.contact_force).max())
     assert found.verified
     assert error <= found.force_error_bound
@@ -316,11 +322,7 @@ def test_a_wall_beyond_two_pushing_contacts_takes_the_errors_at_all_their_ends(s
     # of the second, at the wall
     extra = tuple(contactqp.Load(node=node, force=sign * e, bar=bar)
                   for bar, node in ((0, 3), (1, 0), (1, 3), (2, 0), (2, 2)))
-    nearby = reference(replace(scene, loads=loads + extra))
-    u, lam = np.array(nearby.displacement), np.array(nearby.contact_force)
-    layout = scene.layout
-    reactions = support_reactions(layout, link_forces(layout, element_forces(layout, u)), lam)
-    found = contactqp.check(scene, u, lam, reactions, "inequality")
+    found, _, lam = checked_nearby(scene, extra)
     error = np.abs(lam - exact.contact_force)
     assert found.verified
     assert error[0] == pytest.approx(5.0 * e, rel=1e-3)  # the wall
@@ -356,11 +358,7 @@ def test_a_group_of_contacts_moves_by_the_errors_at_all_their_ends():
     e = 1e-9 * contactqp.solve(scene).force_scale
     extra = tuple(contactqp.Load(node=node, force=sign * e, bar=bar) for bar, node, sign in (
         (0, 1, -1), (0, 2, 1), (0, 3, 1), (0, 4, -1), (1, 1, -1), (1, 2, 1), (2, 0, 1), (2, 1, -1)))
-    nearby = reference(replace(scene, loads=loads + extra))
-    u, lam = np.array(nearby.displacement), np.array(nearby.contact_force)
-    layout = scene.layout
-    reactions = support_reactions(layout, link_forces(layout, element_forces(layout, u)), lam)
-    found = contactqp.check(scene, u, lam, reactions, "inequality")
+    found, u, lam = checked_nearby(scene, extra)
     assert found.verified
     assert np.abs(u - exact.displacement).max() <= found.displacement_error_bound
     assert np.abs(lam - exact.contact_force).max() <= found.force_error_bound
