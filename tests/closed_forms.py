@@ -211,6 +211,67 @@ def brute_force(scene: Scene, contact: str = "inequality"):
     return best[1], best[2], best[3]
 
 
+def _rational_solve(A: list[list[Fraction]], b: list[Fraction]) -> list[Fraction] | None:
+    """x with A x = b by Gauss–Jordan in exact arithmetic; None where A is singular."""
+    n = len(b)
+    rows = [list(A[i]) + [b[i]] for i in range(n)]
+    for col in range(n):
+        pivot = next((r for r in range(col, n) if rows[r][col] != 0), None)
+        if pivot is None:
+            return None
+        rows[col], rows[pivot] = rows[pivot], rows[col]
+        head = rows[col][col]
+        rows[col] = [v / head for v in rows[col]]
+        for r in range(n):
+            if r != col and rows[r][col] != 0:
+                factor = rows[r][col]
+                rows[r] = [a - factor * c for a, c in zip(rows[r], rows[col])]
+    return [rows[i][n] for i in range(n)]
+
+
+def exact_problem_answer(K, f, C, g, prescribed=(), values=(), equality=()):
+    """(u, λ) of min ½uᵀKu − fᵀu s.t. C u <= g (rows in ``equality``: C u = g),
+    u[prescribed] = values, in exact rational arithmetic: every set of rows in contact is
+    tried (equality rows always in), and the one whose KKT conditions hold exactly is kept.
+    For small dense problems (every float read as the rational it is); K positive definite on
+    the free dofs, or held by the rows in contact. Where rows are redundant (their forces not
+    unique) the first set found is kept: compare Cᵀλ, not λ."""
+    K = [[Fraction(float(v)) for v in row] for row in np.asarray(K, dtype=float)]
+    f = exact(np.asarray(f, dtype=float))
+    C = [[Fraction(float(v)) for v in row] for row in np.asarray(C, dtype=float).reshape(
+        len(g), len(f))]
+    g = exact(np.asarray(g, dtype=float))
+    n, m = len(f), len(g)
+    held = {int(d): Fraction(float(v)) for d, v in zip(prescribed, values)}
+    free = [i for i in range(n) if i not in held]
+    rhs_free = [f[i] - sum(K[i][d] * v for d, v in held.items()) for i in free]
+    always = sorted(int(i) for i in equality)
+    others = [i for i in range(m) if i not in always]
+    for size in range(len(others) + 1):
+        for chosen in itertools.combinations(others, size):
+            active = always + list(chosen)
+            k = len(active)
+            A = [[K[i][j] for j in free] + [C[r][i] for r in active] for i in free]
+            A += [[C[r][j] for j in free] + [Fraction(0)] * k for r in active]
+            b = rhs_free + [g[r] - sum(C[r][d] * v for d, v in held.items()) for r in active]
+            x = _rational_solve(A, b)
+            if x is None:
+                continue
+            u = [Fraction(0)] * n
+            for d, v in held.items():
+                u[d] = v
+            for i, j in enumerate(free):
+                u[j] = x[i]
+            lam = [Fraction(0)] * m
+            for i, r in enumerate(active):
+                lam[r] = x[len(free) + i]
+            gaps_met = all(sum(C[r][j] * u[j] for j in range(n)) <= g[r] for r in others)
+            pushing = all(lam[r] >= 0 for r in others)
+            if gaps_met and pushing:
+                return (np.array([float(v) for v in u]), np.array([float(v) for v in lam]))
+    raise AssertionError("no set of rows in contact meets the KKT conditions exactly")
+
+
 def exact(values) -> list[Fraction]:
     return [Fraction(float(v)) for v in values]
 

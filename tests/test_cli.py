@@ -529,11 +529,16 @@ def test_a_scene_file_with_units_as_a_list_exits_2(capsys, tmp_path):
 
 
 def test_verbose_lets_the_solver_print(capfd):
-    """--verbose: OSQP's banner on stdout (the solver's own C code); without it, silence."""
-    assert main(["solve", "--method", "qp", "--backend", "osqp", "--verbose", "--json"]) == 0
+    """--verbose: OSQP's banner (the solver's own C code) on stdout, or with --json on stderr,
+    so that the JSON is JSON alone; without --verbose, silence."""
+    assert main(["solve", "--method", "qp", "--backend", "osqp", "--verbose"]) == 0
     assert "OSQP" in capfd.readouterr().out
+    assert main(["solve", "--method", "qp", "--backend", "osqp", "--verbose", "--json"]) == 0
+    out, err = capfd.readouterr()
+    assert "OSQP" in err and json.loads(out)["solver"] == "osqp"
     assert main(["solve", "--method", "qp", "--backend", "osqp", "--json"]) == 0
-    assert "OSQP" not in capfd.readouterr().out.replace('"osqp"', "")
+    out, err = capfd.readouterr()
+    assert "OSQP" not in out.replace('"osqp"', "") and err == ""
 
 
 def test_penalty_sweep_contact_option(capsys):

@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 import contactqp
 from closed_forms import DEFAULT_F, default_closed_form
 from contactqp.builders import flat_patch
+from contactqp.methods.complementarity import LEMKE_ROWS, NEWTON_FB_ROWS, PGS_WORK, pgs_sweeps
 from contactqp.model import build_model
 from contactqp.random_scenes import random_scene
 from contactqp.reference import reference
@@ -162,7 +163,27 @@ def test_semismooth_newton_on_min_takes_its_set_in_few_steps():
 def test_more_rows_than_the_dense_lcp_takes_is_a_clear_error():
     scene = flat_patch(2100)
     with pytest.raises(contactqp.SolverError, match="up to 2000 contact rows"):
-        contactqp.solve(scene, "lemke")
+        contactqp.solve(scene, "pgs")
+
+
+@pytest.mark.parametrize(("method", "options", "limit"), [
+    ("lemke", {}, LEMKE_ROWS), ("semismooth_newton", {"ncp": "fischer-burmeister"},
+                                NEWTON_FB_ROWS)])
+def test_methods_whose_steps_are_dense_refuse_more_rows_than_they_end_on_in_a_minute(
+        method, options, limit):
+    with pytest.raises(contactqp.SolverError, match=f"takes up to {limit} contact rows") as e:
+        contactqp.solve(flat_patch(limit + 1), method, **options)
+    assert "\n" not in str(e.value) and f"has {limit + 1}" in str(e.value)
+
+
+def test_pgs_takes_the_sweeps_its_work_allows_and_refuses_more():
+    scene = flat_patch(1500)  # 1500 rows: PGS_WORK allows 8888 sweeps
+    budget = PGS_WORK // scene.n_contacts**2
+    assert pgs_sweeps(scene.n_contacts, None) == min(budget, 10_000) < 10_000
+    with pytest.raises(contactqp.OptionError, match=f"at most {budget} sweeps"):
+        contactqp.solve(scene, "pgs", max_iterations=budget + 1)
+    with pytest.raises(contactqp.OptionError, match="at most 1000000"):
+        contactqp.solve(None, "pgs", max_iterations=10**9)
 
 
 @pytest.mark.parametrize(("options", "message"), [

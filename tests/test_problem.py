@@ -36,8 +36,8 @@ def test_a_valid_problem_keeps_plain_arrays():
 
 BAD = [
     ({"f": np.ones(4)}, "K must be 4x4"),
-    ({"f": np.array([0, 0, np.inf, 0, 1.0])}, "f must be finite, got inf at entry 2"),
-    ({"g": np.array([0.5, np.nan])}, "g must be finite, got nan at entry 1"),
+    ({"f": np.array([0, 0, np.inf, 0, 1.0])}, "f[2] must be finite, got inf"),
+    ({"g": np.array([0.5, np.nan])}, "g[1] must be finite, got nan"),
     ({"g": np.ones(3)}, "C must be 3x5"),
     ({"K": chain() + sp.csr_array(([1e-3], ([0], [1])), shape=(5, 5))},
      "K must be symmetric: K[0, 1]"),

@@ -35,7 +35,8 @@ from contactqp.methods.qp import QPProblem, available_qp_solvers, qp_problem
 from contactqp.model import Layout, Model, build_model
 from contactqp.model.handover import problem_from_scene
 from contactqp.prepared import Batch, Prepared, prepare
-from contactqp.problem import Problem, load_problem, save_problem
+from contactqp.problem import Problem
+from contactqp.problem_files import load_problem, save_problem
 from contactqp.problem_result import ProblemResult
 from contactqp.report import detail_table, table
 from contactqp.result import Result

@@ -23,11 +23,12 @@ from pathlib import Path
 from typing import Any
 
 from contactqp import __version__, formatting
-from contactqp.cli_input import check_out_folder, negative_numbers_joined
+from contactqp.cli_input import chatter_to_stderr, check_out_folder, negative_numbers_joined
 from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.lagrange import ACTIVE_SETS
-from contactqp.problem import Problem, load_problem
+from contactqp.problem import Problem
+from contactqp.problem_files import load_problem
 from contactqp.problem_result import ProblemResult, problem_table
 from contactqp.progress import Report
 from contactqp.report import detail_table, table
@@ -137,7 +138,9 @@ def command_solve(args: argparse.Namespace) -> int:
     options.update(_qp_options(args))
     if args.verbose:
         options["verbose"] = True
-    result = solve(_scene(args.scene), args.method, args.contact, args.formulation, **options)
+    with chatter_to_stderr(args.json):
+        result = solve(_scene(args.scene), args.method, args.contact, args.formulation,
+                       **options)
     if args.json:
         print(result.to_json())
     elif isinstance(result, ProblemResult):

@@ -1,9 +1,14 @@
 """What the command line checks before it runs anything: numbers that start with '-', and the
-folder the charts go to. Each gives one line naming the option and the value."""
+folder the charts go to. Each gives one line naming the option and the value. And where a
+run's chatter goes while JSON is being written (:func:`chatter_to_stderr`)."""
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 from contactqp.errors import OptionError
@@ -53,4 +58,24 @@ def check_out_folder(folder: Path) -> None:
                 pass
 
 
-__all__ = ["check_out_folder", "negative_numbers_joined"]
+__all__ = ["chatter_to_stderr", "check_out_folder", "negative_numbers_joined"]
+
+
+@contextlib.contextmanager
+def chatter_to_stderr(active: bool) -> Iterator[None]:
+    """While ``active``, whatever is written to standard output goes to standard error
+    instead, from Python and from a solver's C code alike (file descriptor 1 pointed at 2):
+    with ``--json --verbose`` a solver's progress must not land inside the JSON."""
+    if not active:
+        yield
+        return
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        with contextlib.redirect_stdout(sys.stderr):
+            yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from contactqp._validate import one_line
+from contactqp.fem._arguments import at_least_zero, count, nodes_within, poisson_ratio, positive
 from contactqp.fem._skfem import require_skfem
 from contactqp.fem.elasticity import dof_coordinates, plane_strain_stiffness, rows_above_flat
 from contactqp.problem import Problem
@@ -41,9 +43,22 @@ def block_on_wavy_foundation(length: float = 20.0, height: float = 10.0,
         Element rows along the block's length (the height gets ``elements · H / L``).
     units : str
         The label of the answer's units.
+
+    Raises
+    ------
+    ProblemError
+        An argument that is not valid, or a mesh past :data:`~contactqp.fem._arguments.
+        MAX_NODES` nodes (one line naming it).
     """
-    skfem = require_skfem()
+    name = "block_on_wavy_foundation"
+    length, height = positive(name, "length", length), positive(name, "height", height)
+    young, poisson = positive(name, "young", young), poisson_ratio(name, poisson)
+    amplitude = at_least_zero(name, "amplitude", amplitude)
+    waves, elements = count(name, "waves", waves), count(name, "elements", elements)
+    approach, units = at_least_zero(name, "approach", approach), one_line(f"{name}: units", units)
     rows_high = max(1, round(elements * height / length))
+    nodes_within(name, (elements + 1.0) * (rows_high + 1.0), f"elements = {elements}")
+    skfem = require_skfem()
     mesh = skfem.MeshTri.init_tensor(np.linspace(0.0, length, elements + 1),
                                      np.linspace(0.0, height, rows_high + 1))
     K, dofs = plane_strain_stiffness(mesh, young, poisson)

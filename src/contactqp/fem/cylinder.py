@@ -11,10 +11,14 @@ model is half of it); Hertz's a and p₀ follow from that P (:mod:`contactqp.fem
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from contactqp._validate import one_line
+from contactqp.errors import ProblemError
+from contactqp.fem._arguments import nodes_within, poisson_ratio, positive
 from contactqp.fem.elasticity import (
     dof_coordinates,
     plane_strain_stiffness,
@@ -29,6 +33,7 @@ from contactqp.problem import Problem
 # solver leaves on open rows at its default accuracy (1e-8 relative and less), far below the
 # last pushing row's share (about √(h/a) of the peak, h the row spacing)
 PUSHING = 1e-6
+NAME = "cylinder_on_flat"
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,8 +97,19 @@ def cylinder_on_flat(radius: float = 10.0, young: float = 210e3, poisson: float 
     units : str
         The label of the answer's units.
     """
-    zone = 0.05 * radius if zone is None else zone
-    fine = zone / 40.0 if fine is None else fine
+    radius, young = positive(NAME, "radius", radius), positive(NAME, "young", young)
+    poisson, approach = poisson_ratio(NAME, poisson), positive(NAME, "approach", approach)
+    zone = 0.05 * radius if zone is None else positive(NAME, "zone", zone)
+    fine = zone / 40.0 if fine is None else positive(NAME, "fine", fine)
+    growth = positive(NAME, "growth", growth)
+    units = one_line(f"{NAME}: units", units)
+    if zone > radius:
+        raise ProblemError(f"{NAME}: zone = {zone!r} is wider than the radius {radius!r}")
+    # zone/fine elements along the strip in layers that thicken at the rate growth, then the
+    # rings around it out to R (measured: within a factor of 2 above the meshes made)
+    nodes_within(NAME, 4.0 * (zone / fine) / growth
+                 + 2.0 * math.pi / growth**2 * math.log(max(radius * growth / fine, 2.0)),
+                 f"fine = {fine!r} (zone {zone!r}, growth {growth!r})")
     mesh = graded_quarter_disk(radius, zone, fine, growth)
     K, dofs = plane_strain_stiffness(mesh, young, poisson)
     x, y = mesh.p

@@ -54,11 +54,27 @@ def _text(name: str) -> Callable[[Any], str]:
     return check
 
 
-ITERATIONS = _or_none(lambda v: whole_number("max_iterations", v, 1, error=OptionError))
+# The most max_iterations may ask for, per kind of step, so that no request runs unbounded:
+# a set solve (an active-set step, an update of the augmented Lagrangian, a Newton step) costs
+# a factorisation or a solve with K; a pivot or a sweep a pass over the dense LCP, whose size
+# and work each method bounds again when it knows the rows (methods.complementarity)
+MOST_STEPS = 10**4
+MOST_PASSES = 10**6
 
 
-def _steps(value: Any) -> int:
-    return whole_number("max_iterations", value, 1, error=OptionError)
+def _iterations(most: int, unit: str) -> Callable[[Any], int]:
+    def check(value: Any) -> int:
+        count = whole_number("max_iterations", value, 1, error=OptionError)
+        if count > most:
+            raise OptionError(f"max_iterations must be at most {most} ({unit}), got {count}")
+        return count
+    return check
+
+
+ITERATIONS = _or_none(_iterations(MOST_STEPS, "set solves"))
+PIVOTS = _or_none(_iterations(MOST_PASSES, "pivots"))
+SWEEPS = _or_none(_iterations(MOST_PASSES, "sweeps"))
+_steps = _iterations(MOST_STEPS, "steps")
 
 
 def _residual(value: Any) -> float:
@@ -107,7 +123,7 @@ METHODS: dict[str, Method] = {
         {"penalty": PENALTY,
          "tolerance": lambda v: positive_number("tolerance", v, "relative change of λ",
                                                 OptionError),
-         "max_iterations": lambda v: whole_number("max_iterations", v, 1, error=OptionError)},
+         "max_iterations": _iterations(MOST_STEPS, "updates")},
         ("full", "condensed"), "the augmented Lagrangian (Uzawa) with a moderate penalty"),
     "qp": Method(
         "qp", solve_qp,
@@ -116,10 +132,10 @@ METHODS: dict[str, Method] = {
          "scale": lambda v: flag("scale", v, OptionError),
          "verbose": lambda v: flag("verbose", v, OptionError)},
         FORMULATIONS, "a QP solver, whose dual values are the contact forces"),
-    "lemke": Method("lemke", solve_lemke, {"max_iterations": ITERATIONS}, ("full", "condensed"),
+    "lemke": Method("lemke", solve_lemke, {"max_iterations": PIVOTS}, ("full", "condensed"),
                     "the LCP in the contact forces by Lemke's pivoting (exact, finite)"),
     "pgs": Method("pgs", solve_pgs,
-                  {"relaxation": _relaxation, "tolerance": _residual, "max_iterations": _steps},
+                  {"relaxation": _relaxation, "tolerance": _residual, "max_iterations": SWEEPS},
                   ("full", "condensed"),
                   "the LCP by projected Gauss–Seidel (PSOR with relaxation ω), iterative"),
     "semismooth_newton": Method(

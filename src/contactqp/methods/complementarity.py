@@ -32,7 +32,7 @@ import math
 import numpy as np
 
 from contactqp.check import natural_map
-from contactqp.errors import SolverError
+from contactqp.errors import OptionError, SolverError
 from contactqp.methods.lemke import lemke, unit_diagonal
 from contactqp.model import Condensed, Model, without_circulation
 from contactqp.model.sparse import SparseModel
@@ -42,10 +42,17 @@ LCP_ROWS = 2000  # contact rows up to which the LCP is formed (W dense, rows x r
 LCP_ENTRIES = 2**24  # ... and free nodes x rows, the dense K⁻¹Cᵀ it builds (128 MB)
 NCP_FUNCTIONS = ("min", "fischer-burmeister")
 PGS_TOLERANCE = 1e-10  # natural-map residual (scaled LCP) at which PGS stops
-PGS_MAX_ITERATIONS = 10_000  # sweeps
+PGS_MAX_ITERATIONS = 10_000  # sweeps, where PGS_WORK allows them
 NEWTON_TOLERANCE = 1e-13
 NEWTON_MAX_ITERATIONS = 100
+# What one solve may cost, so that every run ends in about a minute at most on a laptop core
+# (measured on the block of contactqp.fem with one row per bottom node, 2 cores shared):
+LEMKE_ROWS = 1000  # rows Lemke takes: a pivot updates a rows x 2·rows tableau (12 ms at 1000
+# rows), and its default limit of 50 + 4·rows pivots then ends within a minute
+PGS_WORK = 2 * 10**10  # sweeps x rows² PGS may take: a sweep of 2000 rows takes 5 ms
+NEWTON_FB_ROWS = 1000  # rows Fischer–Burmeister's Newton takes: each step a dense rows² solve
 ARMIJO = 1e-4  # sufficient decrease of ½‖Φ‖² along the Newton step
+HELD_OPEN = 1e-9  # a held row left open by more than this (of q's largest entry) is let go
 
 
 def contact_lcp(problem: Model | Condensed | SparseModel
@@ -95,23 +102,50 @@ def _answer(problem: Model | Condensed, contact: str, solver: str, z_solver) -> 
                     info={**info, "natural_map": residual})
 
 
+def _at_most(method: str, rows: int, limit: int, why: str) -> None:
+    """A SolverError where ``rows`` contact rows are more than ``method`` takes."""
+    if rows > limit:
+        raise SolverError(f"{method} takes up to {limit} contact rows ({why}); this problem "
+                          f"has {rows} (lagrange takes any number)")
+
+
 def solve_lemke(problem: Model | Condensed, contact: str, *,
                 max_iterations: int | None = None) -> Solution:
-    """Lemke's method (:mod:`contactqp.methods.lemke`); ``max_iterations``: pivots (default
-    50 + 10 × rows)."""
+    """Lemke's method (:mod:`contactqp.methods.lemke`) on up to LEMKE_ROWS rows;
+    ``max_iterations``: pivots (default 50 + 4 × rows)."""
+    _at_most("lemke", problem.n_contacts, LEMKE_ROWS,
+             "each pivot updates a dense tableau of rows x 2·rows entries")
+
     def pivots(M: np.ndarray, q: np.ndarray):
-        z, count = lemke(M, q, max_iterations)
+        limit = 50 + 4 * q.size if max_iterations is None else max_iterations
+        z, count = lemke(M, q, limit)
         return z, count, True, "solved", {}
 
     return _answer(problem, contact, "lemke", pivots)
 
 
+def pgs_sweeps(rows: int, max_iterations: int | None) -> int:
+    """The sweeps PGS may take on ``rows`` rows: ``max_iterations``, or by default
+    PGS_MAX_ITERATIONS, within PGS_WORK (an OptionError where a given number is past it)."""
+    budget = max(1, PGS_WORK // max(rows, 1) ** 2)
+    if max_iterations is None:
+        return min(PGS_MAX_ITERATIONS, budget)
+    if max_iterations > budget:
+        raise OptionError(f"max_iterations = {max_iterations} sweeps of {rows} rows is more "
+                          f"than pgs takes ({PGS_WORK:.0e} row updates x row length, about a "
+                          f"minute): at most {budget} sweeps at this size")
+    return max_iterations
+
+
 def solve_pgs(problem: Model | Condensed, contact: str, *, relaxation: float = 1.0,
               tolerance: float = PGS_TOLERANCE,
-              max_iterations: int = PGS_MAX_ITERATIONS) -> Solution:
+              max_iterations: int | None = None) -> Solution:
     """Projected Gauss–Seidel (``relaxation`` 1) or PSOR (module docstring); the iterate at
-    the last sweep, with ``claimed_success`` False, when ``max_iterations`` sweeps do not
-    bring the residual under ``tolerance``."""
+    the last sweep, with ``claimed_success`` False, when ``max_iterations`` sweeps (default
+    PGS_MAX_ITERATIONS, within PGS_WORK: :func:`pgs_sweeps`) do not bring the residual under
+    ``tolerance``."""
+    max_iterations = pgs_sweeps(problem.n_contacts, max_iterations)
+
     def sweeps(M: np.ndarray, q: np.ndarray):
         z = np.zeros(q.size)
         rows = [(i, M[i]) for i in range(q.size)]
@@ -129,7 +163,13 @@ def solve_pgs(problem: Model | Condensed, contact: str, *, relaxation: float = 1
 def solve_semismooth_newton(problem: Model | Condensed, contact: str, *, ncp: str = "min",
                             tolerance: float = NEWTON_TOLERANCE,
                             max_iterations: int = NEWTON_MAX_ITERATIONS) -> Solution:
-    """Semismooth Newton on the NCP function ``ncp`` (module docstring), from λ = 0."""
+    """Semismooth Newton on the NCP function ``ncp`` (module docstring), from λ = 0; "min"
+    solves only the rows its step holds (the primal–dual active set), Fischer–Burmeister
+    the whole rows x rows Jacobian (up to NEWTON_FB_ROWS rows)."""
+    if ncp != "min":
+        _at_most("semismooth_newton with ncp='fischer-burmeister'", problem.n_contacts,
+                 NEWTON_FB_ROWS, "each step solves a dense rows x rows Jacobian")
+
     def newton(M: np.ndarray, q: np.ndarray):
         z = np.zeros(q.size)
         merit = _merit(ncp, z, M, q)
@@ -140,7 +180,7 @@ def solve_semismooth_newton(problem: Model | Condensed, contact: str, *, ncp: st
         # exact (random scene, seed 100733; 28 steps reach 1e-16 and 9e-16 of F)
         best: tuple[float, np.ndarray, int] | None = None
         for iteration in range(1, max_iterations + 1):
-            phi, jacobian = _ncp(ncp, z, M @ z + q, M)
+            phi, jacobian = _ncp(ncp, z, M @ z + q, None if ncp == "min" else M)
             residual = natural_map(z, M @ z + q, q)
             if best is not None and not residual < 0.9 * best[0]:
                 return best[1], best[2], True, "converged", {"ncp": ncp}  # round-off reached
@@ -148,9 +188,6 @@ def solve_semismooth_newton(problem: Model | Condensed, contact: str, *, ncp: st
                 if ncp == "min" or residual == 0.0:
                     return z, iteration - 1, True, "converged", {"ncp": ncp}
                 best = (residual, z, iteration - 1)
-            # least squares: rows that depend on each other (zero gaps closing a loop) leave
-            # the generalised Jacobian singular, and any of its solutions will do
-            step = np.linalg.lstsq(jacobian, -phi, rcond=None)[0]
             if ncp == "min":
                 # the full step: Newton on min is the primal-dual active set, exact once the
                 # set is right; ½‖Φ‖² is not smooth, and a line search on it stalls (measured:
@@ -159,8 +196,11 @@ def solve_semismooth_newton(problem: Model | Condensed, contact: str, *, ncp: st
                 if key in seen:
                     return z, iteration, False, "the active set cycles", {"ncp": ncp}
                 seen.add(key)
-                z = z + step
+                z = _held_step(M, q, ~np.frombuffer(key, dtype=bool))
                 continue
+            # least squares: rows that depend on each other (zero gaps closing a loop) leave
+            # the generalised Jacobian singular, and any of its solutions will do
+            step = np.linalg.lstsq(jacobian, -phi, rcond=None)[0]
             t = 1.0
             while True:  # Armijo on ½‖Φ‖²: the Newton step descends at rate −2·merit
                 trial = z + t * step
@@ -181,6 +221,26 @@ def solve_semismooth_newton(problem: Model | Condensed, contact: str, *, ncp: st
                 {"ncp": ncp})
 
     return _answer(problem, contact, "semismooth_newton", newton)
+
+
+def _held_step(M: np.ndarray, q: np.ndarray, held: np.ndarray) -> np.ndarray:
+    """Newton's full step on Φ = min(z, M z + q) from a point whose rows ``held`` have
+    z > M z + q: z = 0 off them, and M_HH z_H = −q_H on them (least squares: rows that depend
+    on each other leave M_HH singular, and any of its solutions will do). The same z as the
+    step through the whole Jacobian, solving only the held rows."""
+    z = np.zeros(q.size)
+    rows = np.flatnonzero(held)
+    while rows.size:
+        z[:] = 0.0
+        z[rows] = np.linalg.lstsq(M[np.ix_(rows, rows)], -q[rows], rcond=None)[0]
+        # held rows that ask for gaps no z meets at once (a looser parallel copy of a row):
+        # least squares misses each; the rows it leaves open are let go, and the rest solved
+        gaps = M[rows] @ z + q[rows]
+        open_rows = gaps > HELD_OPEN * max(float(np.abs(q).max(initial=0.0)), 1.0)
+        if not open_rows.any():
+            break
+        rows = rows[~open_rows]
+    return z
 
 
 def _ncp(ncp: str, a: np.ndarray, b: np.ndarray, M: np.ndarray | None = None

@@ -143,7 +143,11 @@ def entering(model: SparseModel, active: np.ndarray, u: np.ndarray, lam: np.ndar
     at most max(ENTER_MIN, ENTER_FACTOR × |set|) of the deepest per step."""
     F, U = model.force_scale, model.displacement_scale
     passed = model.C @ u - model.g
-    keep = active & ((lam > -DECISION_RTOL * F) | model.equality)
+    # a held row the answer leaves open: the set's rows ask for gaps no u meets at once (a
+    # looser parallel copy of a row, c·u <= 0.5 and 2c·u <= 1.5, both held), and W_AA's
+    # least-norm solution misses both; the open one leaves
+    keep = active & (((lam > -DECISION_RTOL * F) & (passed > -DECISION_RTOL * U))
+                     | model.equality)
     candidates = np.flatnonzero(~active & (passed > DECISION_RTOL * U))
     limit = max(ENTER_MIN, int(ENTER_FACTOR * np.count_nonzero(keep)))
     if candidates.size > limit:  # the deepest first: a stiffness-weighted depth

@@ -17,10 +17,10 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from contactqp.errors import OptionError
+from contactqp.errors import OptionError, SolverError
 from contactqp.methods._active_set import DECISION_RTOL, active_set_loop
 from contactqp.methods.augmented import DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE
-from contactqp.methods.qp import DEFAULT_BACKEND, guarded, resolve_solver
+from contactqp.methods.qp import DEFAULT_BACKEND, attempted, resolve_solver
 from contactqp.methods.qp.problem import QPProblem
 from contactqp.methods.qp.settings import accuracy_settings
 from contactqp.model.sparse import SparseModel, factorise
@@ -36,8 +36,14 @@ def _penalised_solve(model: SparseModel, eps: np.ndarray, cache: dict[bytes, Any
         key = active.tobytes()
         if key not in cache:
             C_A = model.C[active]
-            cache[key] = factorise(sp.csc_matrix(
-                model.K + C_A.T @ sp.diags_array(eps[active]) @ C_A))
+            try:
+                cache[key] = factorise(sp.csc_matrix(
+                    model.K + C_A.T @ sp.diags_array(eps[active]) @ C_A))
+            except RuntimeError:  # a zero pivot: K is singular along a mode no row in A holds
+                raise SolverError(
+                    f"K + εC_AᵀC_A is singular with {int(active.sum())} rows in contact: K "
+                    "leaves a mode free that they do not hold (lagrange and qp solve a K held "
+                    "by contact alone)") from None
         return cache[key].solve(model.P + model.C[active].T @ shift[active])
     return solve
 
@@ -131,7 +137,7 @@ def solve_qp(model: SparseModel, contact: str, *, backend: str = DEFAULT_BACKEND
     start = time.perf_counter()
     qp = qp_from_sparse(model, contact, scale)
     built = time.perf_counter()
-    outcome = guarded(module.solve, qp, name, settings, verbose, verbose=verbose)
+    outcome = attempted(module, backend, name, qp, settings, verbose)
     u_free, contact_force = qp.to_si(outcome.x, np.asarray(outcome.dual, dtype=float))
     label = backend if name == backend else f"{backend}/{name}"
     info = {"backend": backend, "solver": name, "accuracy": accuracy, "scale": bool(scale),

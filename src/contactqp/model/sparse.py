@@ -12,9 +12,14 @@ it), so the contact rows are C_I.
 The factorisation is SuperLU's (``scipy.sparse.linalg.splu``) with the minimum-degree ordering
 of Kᵀ + K and no pivoting off the diagonal (K is symmetric positive definite): measured on a
 2D grid of 8.4·10⁴ dofs (benchmarks/problem.py) it fills in less than COLAMD and factors
-faster. A pivot below :data:`SINGULAR_PIVOT` of the largest diagonal marks K singular: then
-the modes K leaves free are worked out, and one that no contact row holds is an error naming
-it ("nothing holds the model along ...").
+faster. The pivots are LDLᵀ's, so their signs are K's inertia (Sylvester): a pivot below
+−:data:`NEGATIVE_PIVOT` of its own diagonal entry shows K indefinite, refused in one line. A
+pivot within :data:`SINGULAR_PIVOT` of its own diagonal entry (never of the largest: a
+stiffness contrast of 10¹⁴ leaves every pivot near its own entry) may be a free mode: the
+modes are sought by inverse iteration, and kept where their forces are round-off of what
+their entries make (:data:`FREE_MODE`); a mode that no contact row holds is an error naming it
+("nothing holds the model along ..."), one that rows hold is solved through the saddle-point
+system.
 """
 
 from __future__ import annotations
@@ -35,7 +40,11 @@ from contactqp.problem import Problem
 ORDERING = "MMD_AT_PLUS_A"  # SuperLU's fill-reducing ordering for symmetric K
 EINSUM_WORK = 10**8  # multiply-adds up to which W is formed by einsum rather than BLAS
 DENSE_REACH = 4000  # the forward solves go dense up to this many rows of L reached
-SINGULAR_PIVOT = 1e-11  # a pivot below this times the largest diagonal of K: K is singular
+SINGULAR_PIVOT = 1e-10  # a pivot below this times its own diagonal entry: a mode may be free
+NEGATIVE_PIVOT = 1e-8  # a pivot below −this times its own diagonal entry: K is indefinite
+SHIFT = 1e-10  # the shift (of each dof's own diagonal) under which free modes are sought
+FREE_MODE = 1e-13  # a mode whose forces are this much of what its entries make is free
+MAX_MODES = 64  # free modes sought at most (six per floating body in 3D: ten bodies)
 HELD = 1e-8  # a mode x with ‖C x‖ below this × ‖C‖‖x‖ is held by no contact row
 
 
@@ -276,7 +285,8 @@ def diagonal_pivots(U: sp.csc_matrix) -> np.ndarray:
 
 def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseModel:
     """Condense the prescribed dofs out and factorise K_II once (module docstring); a
-    ProblemError where nothing holds the model along a mode K leaves free."""
+    ProblemError where K is not positive semidefinite (the factorisation's evidence named) or
+    where nothing holds the model along a mode K leaves free."""
     n = problem.n
     held = np.zeros(n, dtype=bool)
     held[problem.prescribed] = True
@@ -286,45 +296,151 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseMode
     P = problem.f[free] - (K[free][:, problem.prescribed] @ problem.prescribed_values
                            if problem.prescribed.size else 0.0)
     C = sp.csr_array(problem.C[:, free])
-    factor, cache = _factor_or_none(K_II, ordering)
+    factor, cache, candidates = _factor_or_none(K_II, ordering)
     floating = None
     if factor is None:
-        floating = free_modes(K_II)
-        _held_by_contact(problem, free, C, floating)
+        floating = free_modes(K_II, candidates, free)
+        if floating is None:  # the tiny pivots were a stiffness contrast, not a free mode
+            factor, cache = _plain_factor(K_II, ordering)
+        else:
+            _held_by_contact(problem, free, C, floating)
     return SparseModel(problem, free, K_II, P, C, problem.g, factor, floating, cache)
 
 
+def _plain_factor(K: sp.csc_matrix, ordering: str) -> tuple[spla.SuperLU, ColumnCache]:
+    factor = factorise(K, ordering)
+    return factor, ColumnCache(pivots=diagonal_pivots(factor.U), lower=sp.csr_matrix(factor.U.T))
+
+
+def _relative_pivots(factor: spla.SuperLU, diagonal: np.ndarray) -> np.ndarray | None:
+    """Each pivot over the diagonal entry of K it was taken from (the elimination order), or
+    None where SuperLU did not keep the pivots on the diagonal (then they say nothing of K's
+    inertia)."""
+    if not np.array_equal(factor.perm_r, factor.perm_c):
+        return None
+    own = diagonal[elimination_order(factor)]
+    pivots = diagonal_pivots(factor.U)
+    relative = np.sign(pivots) * np.inf  # a pivot where K's diagonal is 0: only its sign
+    relative[pivots == 0.0] = 0.0
+    positive = own > 0.0
+    relative[positive] = pivots[positive] / own[positive]
+    return relative
+
+
+def elimination_order(factor: spla.SuperLU) -> np.ndarray:
+    """The dof eliminated at each step: Pr K Pc = L U puts dof j at position perm_c[j]."""
+    return np.argsort(factor.perm_c)
+
+
+def _indefinite(K: sp.csc_matrix, relative: np.ndarray, order: np.ndarray,
+                pivots: np.ndarray) -> None:
+    """A ProblemError naming the pivot that shows K has a negative eigenvalue: a pivot of
+    LDLᵀ (a symmetric elimination) below −NEGATIVE_PIVOT of its own diagonal entry, which
+    round-off of a positive semidefinite K cannot make (Sylvester: the pivots' signs are
+    K's inertia)."""
+    negative = np.flatnonzero(relative < -NEGATIVE_PIVOT)
+    if not negative.size:
+        return
+    k = int(negative[np.argmin(relative[negative])])
+    dof = int(order[k])
+    raise ProblemError(
+        f"K must be positive semidefinite, but it has {negative.size} negative "
+        f"eigenvalue{'s' if negative.size > 1 else ''}: its symmetric factorisation meets the "
+        f"pivot {float(pivots[k]):.6g} at free dof {dof} (K there {float(K[dof, dof]):.6g}); "
+        "the energy ½uᵀKu is unbounded below")
+
+
 def _factor_or_none(K: sp.csc_matrix, ordering: str
-                    ) -> tuple[spla.SuperLU | None, ColumnCache]:
-    """(the factorisation, a cache holding its pivots and Uᵀ), or (None, an empty cache)
-    where a pivot says K is singular. U is read once (scipy copies it out at each .U)."""
+                    ) -> tuple[spla.SuperLU | None, ColumnCache, int]:
+    """(the factorisation, a cache holding its pivots and Uᵀ, 0), or (None, an empty cache,
+    the number of pivots that are zero to working precision) where K is singular or nearly:
+    a pivot within SINGULAR_PIVOT of its own diagonal entry (a stiffness contrast alone never
+    makes one: the rule is relative to each dof's own stiffness, not to the stiffest). A
+    ProblemError where a pivot shows K indefinite. U is read once (scipy copies it out at each
+    .U)."""
     if K.shape[0] == 0:
         K = sp.eye(1, format="csc")
+    diagonal = K.diagonal()
     try:
         factor = factorise(K, ordering)
-    except RuntimeError:  # "Factor is exactly singular"
-        return None, ColumnCache()
+    except RuntimeError:  # "Factor is exactly singular": a zero pivot; the shifted K says more
+        return None, ColumnCache(), _shifted_inertia(K, ordering)
+    relative = _relative_pivots(factor, diagonal)
+    if relative is None:
+        return None, ColumnCache(), _shifted_inertia(K, ordering)
     U = factor.U
     pivots = diagonal_pivots(U)
-    if np.abs(pivots).min() <= SINGULAR_PIVOT * float(np.abs(K.diagonal()).max()):
-        return None, ColumnCache()
+    _indefinite(K, relative, elimination_order(factor), pivots)
+    tiny = int(np.count_nonzero(relative <= SINGULAR_PIVOT))
+    if tiny:
+        return None, ColumnCache(), tiny
     # Uᵀ: lower triangular with L's structure (K symmetric), for the forward solves
-    return factor, ColumnCache(pivots=pivots, lower=sp.csr_matrix(U.T))
+    return factor, ColumnCache(pivots=pivots, lower=sp.csr_matrix(U.T)), 0
 
 
-def free_modes(K: sp.csc_matrix) -> np.ndarray:
-    """An orthonormal basis of the modes K leaves free (K x ≈ 0), by inverse iteration on K
-    shifted by 1e-10 of its largest diagonal (columns: modes)."""
+def _shift(K: sp.csc_matrix) -> sp.csc_matrix:
+    """SHIFT times each dof's own diagonal entry (the largest where it is 0), a diagonal."""
+    diagonal = K.diagonal()
+    floor = float(diagonal.max(initial=0.0)) or 1.0
+    return sp.diags_array(SHIFT * np.where(diagonal > 0.0, diagonal, floor), format="csc")
+
+
+def _shifted_inertia(K: sp.csc_matrix, ordering: str) -> int:
+    """After a zero pivot: K shifted by SHIFT of its own diagonal is factorised instead (a
+    positive semidefinite K becomes definite); a negative pivot of that is K's negative
+    eigenvalue (a ProblemError), else every dof counts as a candidate free mode."""
+    shifted = sp.csc_matrix(K + _shift(K))
+    try:
+        factor = factorise(shifted, ordering)
+    except RuntimeError:
+        raise ProblemError("K must be positive semidefinite, but K shifted by "
+                           f"{SHIFT:.0e} of its diagonal is still singular (a zero pivot): K "
+                           "has a negative eigenvalue") from None
+    relative = _relative_pivots(factor, shifted.diagonal())
+    if relative is not None:
+        _indefinite(shifted, relative, elimination_order(factor), diagonal_pivots(factor.U))
+        return int(np.count_nonzero(relative <= 1e3 * SHIFT))
+    return min(K.shape[0], 64)  # no inertia to read: a generous number of trial modes
+
+
+def free_modes(K: sp.csc_matrix, count: int = 8, free: np.ndarray | None = None
+               ) -> np.ndarray | None:
+    """An orthonormal basis of the modes K leaves free (columns), or None where no mode is
+    (a stiffness contrast made the pivots tiny, not a free mode). With D K's diagonal (its
+    largest where 0) and K̃ = D^-½ K D^-½ (a unit diagonal, so that no dof's stiffness
+    matters more than another's), subspace inverse iteration on K̃ + SHIFT·I from ``count``
+    (the tiny pivots) plus a margin of trial vectors, then Rayleigh–Ritz on K̃: the Ritz
+    vectors are K̃'s own, and a mode is free where its forces ‖K x‖∞ are within FREE_MODE of
+    what its entries make, ‖|K| |x|‖∞ (round-off). A ProblemError where a mode's energy is
+    negative beyond round-off (K indefinite; ``free`` names the dofs)."""
     n = K.shape[0]
-    shift = 1e-10 * float(np.abs(K.diagonal()).max())
-    factor = factorise(K + shift * sp.eye(n, format="csc"))
+    diagonal = K.diagonal()
+    D = np.where(diagonal > 0.0, diagonal, float(diagonal.max(initial=0.0)) or 1.0)
+    root = np.sqrt(D)
+    factor = factorise(sp.csc_matrix(K + sp.diags_array(SHIFT * D, format="csc")))
     import scipy.linalg
 
-    trial = np.random.default_rng(0).standard_normal((n, min(n, 8)))
-    for _ in range(3):
-        trial = scipy.linalg.qr(factor.solve(trial), mode="economic")[0]
-    energy = np.linalg.norm(K @ trial, axis=0)
-    return trial[:, energy <= 1e-6 * float(np.abs(K.diagonal()).max())]
+    y = np.random.default_rng(0).standard_normal((n, min(n, count + 4, MAX_MODES)))
+    for _ in range(4):  # (K̃ + SHIFT·I)⁻¹ y = D^½ (K + SHIFT·D)⁻¹ D^½ y
+        y = scipy.linalg.qr(root[:, None] * factor.solve(root[:, None] * y), mode="economic")[0]
+    x = y / root[:, None]
+    values, rotation = np.linalg.eigh(x.T @ (K @ x))  # Rayleigh–Ritz on K̃ (yᵀK̃y = xᵀKx)
+    x = x @ rotation
+    forces = K @ x
+    made = (abs(K) @ np.abs(x)).max(axis=0)
+    size = np.abs(forces).max(axis=0)
+    negative = values < -FREE_MODE * np.einsum("ij,ij->j", np.abs(x), abs(K) @ np.abs(x))
+    if negative.any():
+        mode = x[:, int(np.flatnonzero(negative)[0])]
+        dofs = np.argsort(-np.abs(mode), kind="stable")[:4]
+        names = free[dofs] if free is not None else dofs
+        raise ProblemError(f"K must be positive semidefinite, but a mode moving dofs "
+                           f"{', '.join(map(str, names.tolist()))} has negative energy: K has a "
+                           "negative eigenvalue")
+    keep = size <= FREE_MODE * np.where(made > 0.0, made, 1.0)
+    if not keep.any():
+        return None
+    return scipy.linalg.orth(x[:, keep])
 
 
 def _held_by_contact(problem: Problem, free: np.ndarray, C: sp.csr_array,
@@ -335,7 +451,7 @@ def _held_by_contact(problem: Problem, free: np.ndarray, C: sp.csr_array,
     touched = C @ modes
     _, sigma, vt = np.linalg.svd(touched, full_matrices=True) if touched.size else (
         None, np.zeros(0), np.eye(modes.shape[1]))
-    scale = max(float(abs(C).max()) if C.nnz else 1.0, 1.0)
+    scale = float(abs(C).max()) if C.nnz else 1.0
     count = int(np.sum(sigma > HELD * scale))
     if count == modes.shape[1]:
         return

@@ -84,7 +84,8 @@ DEFAULT_SCALE = True
 # dense matrix alone would take DENSE_LIMIT² · 8 bytes (200 MB) and the solve O(n³).
 DENSE_LIMIT = 5000
 DENSE_SOLVERS = {("qpsolvers", "daqp"), ("qpsolvers", "quadprog"), ("qpsolvers", "ecos"),
-                 ("cvxpy", "DAQP"), ("cvxpy", "PROXQP")}
+                 ("qpsolvers", "qpoases"), ("qpsolvers", "pyqpmad"), ("qpsolvers", "nppro"),
+                 ("qpsolvers", "qpax"), ("cvxpy", "DAQP"), ("cvxpy", "PROXQP")}
 
 
 def backend_module(name: str) -> ModuleType | None:
@@ -218,6 +219,20 @@ def guarded(solve: Any, qp: QPProblem, *args: Any, verbose: bool = False) -> QPO
         return failed_outcome(qp.n, qp.g.size + qp.n_ties, f"raised {type(error).__name__}: {error}")
 
 
+def attempted(module: ModuleType, backend: str, name: str, qp: QPProblem,
+              settings: dict[str, Any], verbose: bool) -> QPOutcome:
+    """The backend's outcome on ``qp`` (:func:`guarded`), or a failed outcome that says why
+    it was not attempted: a solver that works on dense matrices, past DENSE_LIMIT unknowns
+    (DAQP through cvxpy and ECOS through qpsolvers crashed the interpreter on a model of 10⁵
+    dofs: a crash in a solver's C code cannot be caught, so it is not risked)."""
+    if (backend, name) in DENSE_SOLVERS and qp.n > DENSE_LIMIT:
+        return failed_outcome(
+            qp.n, qp.g.size + qp.n_ties,
+            f"not attempted: {name} works on dense matrices and this model has {qp.n} "
+            f"unknowns (limit {DENSE_LIMIT}); clarabel, osqp and piqp take sparse ones")
+    return guarded(module.solve, qp, name, settings, verbose, verbose=verbose)
+
+
 def solve_qp(model: Model | Condensed, contact: str, *, backend: str = DEFAULT_BACKEND,
              solver: str | None = None, accuracy: str = "default",
              scale: bool = DEFAULT_SCALE, formulation: str = "full",
@@ -234,14 +249,7 @@ def solve_qp(model: Model | Condensed, contact: str, *, backend: str = DEFAULT_B
     qp = qp_from_model(model, contact, scale, formulation)
     built = time.perf_counter()
     label = backend if name == backend else f"{backend}/{name}"
-    if (backend, name) in DENSE_SOLVERS and qp.n > DENSE_LIMIT:
-        outcome = failed_outcome(
-            qp.n, qp.g.size + qp.n_ties,
-            f"not attempted: {name} works on dense matrices and the bar has {qp.n} unknowns "
-            f"(limit {DENSE_LIMIT})",
-        )
-    else:
-        outcome = guarded(module.solve, qp, name, settings, verbose, verbose=verbose)
+    outcome = attempted(module, backend, name, qp, settings, verbose)
     dual = np.asarray(outcome.dual, dtype=float)  # of qp.rows(): the ties, then the contacts
     u_free, contact_force = qp.to_si(outcome.x, dual[qp.n_ties:])
     info = {"backend": backend, "solver": name, "accuracy": accuracy, "scale": bool(scale),
@@ -256,7 +264,20 @@ def solve_qp(model: Model | Condensed, contact: str, *, backend: str = DEFAULT_B
 
 
 __all__ = [
-    "ACCURACIES", "BACKENDS", "DEFAULT_BACKEND", "DEFAULT_SCALE", "DENSE_LIMIT", "QPOutcome",
-    "QPProblem", "QPSolverInfo", "available_qp_solvers", "backend_module", "qp_from_model",
-    "qp_problem", "resolve_solver", "scales", "solve_qp",
+    "ACCURACIES",
+    "BACKENDS",
+    "DEFAULT_BACKEND",
+    "DEFAULT_SCALE",
+    "DENSE_LIMIT",
+    "QPOutcome",
+    "QPProblem",
+    "QPSolverInfo",
+    "attempted",
+    "available_qp_solvers",
+    "backend_module",
+    "qp_from_model",
+    "qp_problem",
+    "resolve_solver",
+    "scales",
+    "solve_qp",
 ]
