@@ -1,4 +1,4 @@
-"""contactqp.pairs: which pushing bar contacts move, the groups of bars they join, and what
+"""contactqp.check.chain.bar_contacts: which pushing bar contacts move, the groups of bars they join, and what
 they pass on to the held nodes.
 
 Every expected value is worked out by hand from the scene as drawn (node numbers in the
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import contactqp
-from contactqp.pairs import pushing_pairs, through_pairs
+from contactqp.check.chain.bar_contacts import pushing_pairs, through_pairs
 
 
 def four_bars() -> contactqp.Scene:

@@ -399,7 +399,7 @@ MTX_CASES = [
     ("no size line", {"g": "%%MatrixMarket matrix array real general\n% only a comment\n"},
      ("g.mtx has no size line",)),
     ("too many rows", {"f": "%%MatrixMarket matrix array real general\n4 1\n0\n0\n1\n2\n"},
-     ("K must be 4x4 (f has n = 4 entries)",)),
+     ("f.mtx has 4 entries but K.mtx is 3x3",)),
 ]
 
 

@@ -17,7 +17,6 @@ import scipy.sparse as sp
 import contactqp
 from contactqp.errors import OptionError, SolverError
 from contactqp.methods.complementarity import LCP_ROWS
-from contactqp.model.sparse import build_sparse_model
 
 # the bound holds up to the round-off of comparing floats with the exact answer: a few
 # hundred units in the last place of F and U (the check's residual r* = K u* − f + Cᵀλ* is
@@ -228,11 +227,9 @@ def test_mixed_equality_rows_by_lagrange_penalty_and_augmented():
 
 def test_a_wrong_answer_is_not_verified():
     problem = random_problem(3)
-    model = build_sparse_model(problem)
     right = contactqp.solve(problem)
-    from contactqp.problem_check import check_problem
     lam = right.contact_force * 1.01 + 1e-3 * right.force_scale  # 1 % off, every row pushing
-    found = check_problem(model, right.u[model.free], lam)
+    found = contactqp.check(problem, right.u, lam)
     assert not found.verified and found.force_error_bound > 1e-3 * right.force_scale
 
 

@@ -1,4 +1,4 @@
-"""contactqp.runs: what the check keeps per held set, the running sum as its steps, and the
+"""contactqp.check.chain.spans: what the check keeps per held set, the running sum as its steps, and the
 runs taken one by one.
 
 Every expected value is the same computation made without the kept sets (the cache bypassed)
@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 import contactqp
-from contactqp import bounds, runs
 from contactqp.builders import flat_patch
+from contactqp.check.chain import certificate as bounds
+from contactqp.check.chain import spans as runs
 from contactqp.model import segment_reduce
 from contactqp.random_scenes import random_scene
 from contactqp.reference import reference

@@ -13,7 +13,7 @@ through qpsolvers, as qpbenchmark solves it, and judged twice:
   as displacements (u = x, or U·x), checked by contactqp.check against the scene (verified or
   not), and compared with the exact contact forces (right: within 1e-5 of the scene's F);
   a 2D problem (exact.json names it by ``fem``: export.py builds it again with scikit-fem)
-  is checked by contactqp's check for a problem (contactqp.problem_check) the same way.
+  is checked by contactqp's check for a problem (contactqp.check.on_set) the same way.
 
 Writes results/compare.md: the counts, and every disagreement (a success whose force is wrong,
 a failure whose force is right) with its numbers.
@@ -37,10 +37,9 @@ from contactqp_test_set import ContactqpTestSet
 from export import fem_problems
 
 import contactqp
-from contactqp.model import element_forces, link_forces
+from contactqp.check.on_set import check_problem
+from contactqp.model import element_forces, link_forces, support_reactions
 from contactqp.model.sparse import build_sparse_model
-from contactqp.problem_check import check_problem
-from contactqp.result import support_reactions
 
 PROBLEMS = HERE / "problems"
 

@@ -18,7 +18,7 @@ Two 2D problems from scikit-fem (contactqp.fem; skipped with a note when it is n
 each a contactqp.Problem: hertz_coarse, the Hertz cylinder at its coarse mesh (docs/hertz.md:
 h = 0.05 mm along the contact strip, 7 499 free dofs, 17 rows), and block_wavy, the block on a
 wavy foundation (1 640 free dofs, 41 rows). Their QP is the sparse model's
-(contactqp.methods.sparse.qp_from_sparse: x the free dofs, P = K_II, q = −(f_I − K_ID u_D),
+(contactqp.methods.qp.problem.qp_from_model: x the free dofs, P = K_II, q = −(f_I − K_ID u_D),
 G = C_I); their exact duals are Lagrange's answer, verified, with the distance the check
 measured to the exact answer on its contact set (``exact_duals_bound``, over F: about 1e-12).
 Instead of a scene file, exact.json names the problem (``fem``), which compare.py builds again.
@@ -41,7 +41,6 @@ sys.path.insert(0, str(HERE.parent))  # benchmarks/cases.py
 import contactqp
 from cases import default_with, free_bar, tapered_scene, touching
 from contactqp.methods.qp.problem import qp_from_model
-from contactqp.methods.sparse import qp_from_sparse
 from contactqp.model.sparse import build_sparse_model
 from contactqp.reference import reference
 
@@ -88,7 +87,7 @@ def export_problem(name: str, problem: contactqp.Problem, out: Path) -> dict[str
         raise RuntimeError(f"{name}: Lagrange's answer is not verified ({exact.message})")
     entries = {}
     for scaled in (False, True):
-        qp = qp_from_sparse(model, "inequality", scale=scaled)
+        qp = qp_from_model(model, "inequality", scale=scaled)
         problem_name = f"{name}_{'scaled' if scaled else 'SI'}"
         save(out / f"{problem_name}.npz", qp.K, qp.q, qp.C, qp.g)
         entries[problem_name] = {

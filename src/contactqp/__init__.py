@@ -37,9 +37,8 @@ from contactqp.model.handover import problem_from_scene
 from contactqp.prepared import Batch, Prepared, prepare
 from contactqp.problem import Problem
 from contactqp.problem_files import load_problem, save_problem
-from contactqp.problem_result import ProblemResult
 from contactqp.report import detail_table, table
-from contactqp.result import Result
+from contactqp.result import ProblemResult, Result
 from contactqp.scene import (
     UNIT_SYSTEMS,
     Bar,

@@ -29,7 +29,6 @@ from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.lagrange import ACTIVE_SETS
 from contactqp.problem import Problem
 from contactqp.problem_files import load_problem
-from contactqp.problem_result import ProblemResult, problem_table
 from contactqp.progress import Report
 from contactqp.report import detail_table, table
 from contactqp.result import Result
@@ -143,11 +142,9 @@ def command_solve(args: argparse.Namespace) -> int:
                        **options)
     if args.json:
         print(result.to_json())
-    elif isinstance(result, ProblemResult):
-        print(problem_table([result]) + ("\n\n" + result.summary() if args.detail else ""))
     else:
         _print_runs([Run(result.label, result.contact, result)], args.detail)
-    if isinstance(result, ProblemResult):
+    if result.scene is None:
         pass  # a problem has no bar to draw
     elif getattr(args, "out", None) and _charts_wanted(args):  # solve draws only when asked
         from contactqp import plot  # matplotlib only when a chart is asked for

@@ -273,12 +273,26 @@ def _read_folder(path: Path) -> dict[str, Any]:
         raise ProblemError(f"problem folder {str(path)!r} lacks {', '.join(missing)} (it needs "
                            f"{', '.join(MATRIX_MARKET)})")
     K, f, C, g = (_read_matrix_market(path / file) for file in MATRIX_MARKET)
-    arrays = {"K": K, "f": _column(path / "f.mtx", f), "C": C,
-              "g": _column(path / "g.mtx", g)}
+    f, g = _column(path / "f.mtx", f), _column(path / "g.mtx", g)
+    _sizes_agree(K.shape, f.size, C.shape, g.size)
+    arrays = {"K": K, "f": f, "C": C, "g": g}
     extra = path / "extra.npz"
     if extra.exists():
         arrays.update(_extras(extra, _npz_arrays(extra)))
     return arrays
+
+
+def _sizes_agree(K: tuple[int, ...], n: int, C: tuple[int, ...], m: int) -> None:
+    """A ProblemError naming the two files whose sizes disagree: K.mtx n x n, f.mtx n
+    entries, C.mtx m x n, g.mtx m entries."""
+    if K[0] != K[1]:
+        raise ProblemError(f"K.mtx is {K[0]}x{K[1]}: a stiffness is square")
+    if n != K[0]:
+        raise ProblemError(f"f.mtx has {n} entries but K.mtx is {K[0]}x{K[1]}")
+    if C[1] != K[0]:
+        raise ProblemError(f"C.mtx has {C[1]} columns but K.mtx is {K[0]}x{K[1]}")
+    if m != C[0]:
+        raise ProblemError(f"g.mtx has {m} entries but C.mtx has {C[0]} rows")
 
 
 def _column(path: Path, value: Any) -> np.ndarray:

@@ -1,5 +1,6 @@
-"""The comparison table: runs of one scene (:func:`contactqp.compare`), one row each, in the
-scene's units; numbered notes under it, each written once; every contact on request.
+"""The comparison table: runs of one scene or problem (:func:`contactqp.compare`), one row
+each, in its units; numbered notes under it, each written once; every contact on request. The
+one table every Result is printed in.
 
 >>> import contactqp
 >>> print(contactqp.table(contactqp.compare()))      # doctest: +SKIP
@@ -58,12 +59,22 @@ def _numbered(runs: list[Run]) -> tuple[list[str], list[str]]:
     return marks, texts
 
 
-def _scene_of(runs: list[Run]):
-    return next((run.result.scene for run in runs if run.result is not None), None)
+def _first(runs: list[Run]) -> Result | None:
+    return next((run.result for run in runs if run.result is not None), None)
+
+
+def _units(runs: list[Run]) -> tuple[str, str]:
+    """(force, length) labels of the runs' model ("" where it has none)."""
+    first = _first(runs)
+    return first.model.units if first is not None else ("", "")
 
 
 def _force_scale(runs: list[Run]) -> float:
     return max((run.result.force_scale for run in runs if run.result is not None), default=1.0)
+
+
+def _bracket(unit: str) -> str:
+    return f"({unit})" if unit else ""
 
 
 def table(runs: list[Run]) -> str:
@@ -89,15 +100,13 @@ def table(runs: list[Run]) -> str:
     str
         The table and its notes, one line each, ready to print.
     """
-    scene = _scene_of(runs)
-    unit = scene.unit if scene is not None else None
-    force_unit, length_unit = (unit.force, unit.length) if unit else ("", "")
+    force_unit, length_unit = _units(runs)
     scale = _force_scale(runs)
     exact = any(run.exact_force is not None for run in runs)
     marks, texts = _numbered(runs)
-    header = [("method", ""), ("contact", ""), ("contact force", f"({force_unit})")]
-    header += [("error", f"({force_unit})")] if exact else []
-    header += [("penetration", f"({length_unit})"), ("residual", ""), ("verified", ""),
+    header = [("method", ""), ("contact", ""), ("contact force", _bracket(force_unit))]
+    header += [("error", _bracket(force_unit))] if exact else []
+    header += [("penetration", _bracket(length_unit)), ("residual", ""), ("verified", ""),
                ("time", "(ms)"), ("note", "")]
     rows = []
     for run, mark in zip(runs, marks):
@@ -150,13 +159,14 @@ def detail_table(runs: list[Run]) -> str:
     str
         One line per run and contact, then per support, ready to print.
     """
-    scene = _scene_of(runs)
-    if scene is None:
+    first = _first(runs)
+    if first is None:
         return "no run produced an answer"
-    unit, scale = scene.unit, _force_scale(runs)
-    names = formatting.row_names(scene)
-    header = [("method", ""), ("contact", ""), ("where", ""), ("force", f"({unit.force})"),
-              ("exact", f"({unit.force})"), ("penetration", f"({unit.length})")]
+    (force_unit, length_unit), scale = _units(runs), _force_scale(runs)
+    names = first.names
+    supports = ("support" if first.scene is not None else "prescribed dof")
+    header = [("method", ""), ("contact", ""), ("where", ""), ("force", _bracket(force_unit)),
+              ("exact", _bracket(force_unit)), ("penetration", _bracket(length_unit))]
     rows = []
     for run in runs:
         r = run.result
@@ -167,7 +177,7 @@ def detail_table(runs: list[Run]) -> str:
             rows.append([run.label, run.contact, name, formatting.force(force, scale),
                          "" if np.isnan(known) else formatting.force(known, scale),
                          formatting.number(depth, ".3g")])
-        rows += [[run.label, run.contact, f"support[{i}]", formatting.force(reaction, scale),
+        rows += [[run.label, run.contact, f"{supports}[{i}]", formatting.force(reaction, scale),
                   "", ""] for i, reaction in enumerate(r.reactions)]
     return formatting.text_table(header, rows)
 

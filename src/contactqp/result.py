@@ -14,35 +14,20 @@ from typing import Any
 import numpy as np
 
 from contactqp import formatting
-from contactqp.check import GUARANTEE, TOLERANCES, Check, Tolerances, check
+from contactqp.check import GUARANTEE, TOLERANCES, Check, Tolerances, check_model
+from contactqp.check.chain import chain_bounds, sized
+from contactqp.methods.base import Solution
 from contactqp.model import (
+    ContactModel,
     Layout,
-    Model,
-    contact_forces_on_nodes,
     element_forces,
     link_forces,
     penetration,
+    support_reactions,
 )
 from contactqp.scene import Scene
 
 TOUCHING = 1e-12  # a penetration within this of U is round-off: the contact touches
-
-
-@dataclass(frozen=True)
-class Solution:
-    """What a method returns: free-node displacements (m) and one contact force per contact
-    row (N)."""
-
-    u_free: np.ndarray
-    contact_force: np.ndarray
-    solver: str
-    iterations: int = 1
-    status: str = "solved"  # the solver's own claim, recorded, never trusted
-    claimed_success: bool = True
-    info: dict[str, Any] = field(default_factory=dict)
-    # every node's displacement, 0 at the supports, where the method has it over the whole
-    # chain (the hull): the Result takes it as it is instead of placing u_free again
-    u_nodes: np.ndarray | None = field(default=None, repr=False, compare=False)
 
 
 class Reported:
@@ -73,34 +58,39 @@ def claim_warnings(solution: Solution, verified: bool) -> list[str]:
 
 @dataclass(frozen=True, eq=False)
 class Result(Reported):
-    """Everything one solve found, in physical words, with its independent check.
+    """Everything one solve found, in physical words, with its independent check: the same
+    Result for a bar scene and for a user's own model (a :class:`~contactqp.Problem`); what
+    only bars have (element forces, stresses) is there where the model has it, None
+    elsewhere.
 
     Attributes
     ----------
-    u : displacement of every node (m, +x), supports included, bar after bar.
-    contact_force : one per contact row (N): the walls in scene order, then the bar contacts;
-        positive when the wall (the other bar) pushes.
-    reactions : one per support in scene order (N), the force the support applies in +x.
-    penetration : one per contact row (m), positive when the contact is closed past its gap.
-    element_force, stress : axial force (N) and stress (Pa) of each element, bar after bar,
-        tension positive.
-    stress_ratio : largest abs(stress) over the yield stress (None without a yield stress).
-    model : the model solved (``scene`` and ``layout`` are its scene and numbering).
-    residuals, verified, physical, message : the independent check
-        (:func:`contactqp.check.check`).
+    u : the displacement of every node (a scene: bar after bar, supports included) or every dof
+        (a problem: the prescribed ones at their values).
+    contact_force : one per contact row, positive when the row pushes (acts as −Cᵀλ); a
+        scene's rows are its walls in scene order, then its bar contacts.
+    reactions : one per support (a scene, in scene order, +x) or prescribed dof (a problem):
+        the force it applies.
+    penetration : C u − g per row, positive past the gap.
+    element_force, stress : a scene's: the axial force and stress of each element, bar after
+        bar, tension positive (None for a problem).
+    stress_ratio : largest abs(stress) over the yield stress (None without a yield stress or
+        a bar).
+    model : the model solved (``scene``, ``layout``: a scene's; ``problem``: a problem's).
+    residuals, verified, physical, message : the independent check (:func:`contactqp.check`).
     force_error_bound : every contact force and reaction is within this of the exact answer
-        (N), as far as the check can tell from the residuals (contactqp.check).
-    displacement_error_bound : every displacement is within this of the exact answer (m).
-    force_scale, displacement_scale : F (N) and U (m), the scene's scales the residuals and
-        the guarantee are relative to.
-    status, claimed_success : what the solver itself said, recorded and not trusted.
+        (force units).
+    displacement_error_bound : every displacement is within this of the exact answer.
+    force_scale, displacement_scale : F and U, the model's scales the residuals and the
+        guarantee are relative to (:mod:`contactqp.model.base`).
+    status, claimed_success, iterations : what the method said, recorded and not trusted.
     time : wall time of the whole solve (s); timings splits it into build (the model), solve
         (the method) and check (this Result's quantities and its check).
     info : what the method reported beyond u and λ (e.g. a QP's scales and the solver's own
-        timings; in the strain formulation ``element_force``, the tie rows' multipliers, N).
+        timings; in the strain formulation ``element_force``, the tie rows' multipliers).
     """
 
-    model: Model
+    model: ContactModel
     method: str
     solver: str
     contact: str
@@ -109,9 +99,6 @@ class Result(Reported):
     contact_force: np.ndarray
     reactions: np.ndarray
     penetration: np.ndarray
-    element_force: np.ndarray
-    stress: np.ndarray
-    stress_ratio: float | None
     residuals: dict[str, float | None]
     verified: bool
     physical: bool
@@ -125,18 +112,36 @@ class Result(Reported):
     iterations: int
     time: float
     timings: dict[str, float]
-    warnings: tuple[str, ...]
+    warnings: tuple[str, ...] = ()
     info: dict[str, Any] = field(default_factory=dict)
+    element_force: np.ndarray | None = None
+    stress: np.ndarray | None = None
+    stress_ratio: float | None = None
 
     @property
-    def scene(self) -> Scene:
-        """The scene solved."""
-        return self.model.scene
+    def scene(self) -> Scene | None:
+        """The scene solved (None for a problem)."""
+        return self.model.scene if self.model.layout is not None else None
 
     @property
-    def layout(self) -> Layout:
-        """The scene's numbering and arrays (:class:`~contactqp.model.Layout`)."""
+    def layout(self) -> Layout | None:
+        """The scene's numbering and arrays (:class:`~contactqp.model.Layout`; None for a
+        problem)."""
         return self.model.layout
+
+    @property
+    def problem(self) -> Any:
+        """The user's problem solved (None for a scene)."""
+        return getattr(self.model, "problem", None)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Each contact row's name."""
+        return self.model.row_names
+
+    def _units(self) -> tuple[str, str]:
+        force, length = self.model.units
+        return (f" {force}" if force else ""), (f" {length}" if length else "")
 
     def __repr__(self) -> str:
         """One line: method, contact, verdict, the largest contact force."""
@@ -147,69 +152,85 @@ class Result(Reported):
         if not self.contact_force.size:
             return "no contacts"
         i = formatting.largest_entry(self.contact_force)
-        name = formatting.row_names(self.scene)[i]
         return (f"largest contact force {formatting.force(self.contact_force[i], self.force_scale)}"
-                f" {self.scene.unit.force} on {name}")
+                f"{self._units()[0]} on {self.names[i]}")
 
     def _guarantee(self) -> str:
         """What ``verified`` says of this answer, or why it is not verified."""
-        unit = self.scene.unit
+        force, length = self._units()
         if not self.verified:
             return f"NOT verified: {self.message}"
         return (f"verified: every contact force and reaction is within "
-                f"{formatting.number(self.force_error_bound, '.1e')} {unit.force}, every "
-                f"displacement within {formatting.number(self.displacement_error_bound, '.1e')} "
-                f"{unit.length} of the exact answer (the check's bounds; at most "
+                f"{formatting.number(self.force_error_bound, '.1e')}{force}, every "
+                f"displacement within {formatting.number(self.displacement_error_bound, '.1e')}"
+                f"{length} of the exact answer (the check's bounds; at most "
                 f"{GUARANTEE[0]:.0e}·F and {GUARANTEE[1]:.0e}·U, F = "
-                f"{formatting.number(self.force_scale, '.4g')} {unit.force}, U = "
-                f"{formatting.number(self.displacement_scale, '.4g')} {unit.length})")
+                f"{formatting.number(self.force_scale, '.4g')}{force}, U = "
+                f"{formatting.number(self.displacement_scale, '.4g')}{length})")
 
     def _forces(self, most: int = 8) -> str:
         """The contact forces that carry force (more than 1e-5·F), the largest first, at most
         ``most`` of them."""
-        return formatting.carrying_forces(self.contact_force, formatting.row_names(self.scene),
-                                          self.force_scale, most)
+        return formatting.carrying_forces(self.contact_force, self.names, self.force_scale,
+                                          most)
 
     def _penetration(self) -> str:
         i = int(np.argmax(self.penetration))
         depth = formatting.number(self.penetration[i], ".3g")
         touching = abs(self.penetration[i]) <= TOUCHING * self.displacement_scale
         state = "touching" if touching else ("past its gap" if self.penetration[i] > 0 else "open")
-        return (f"{depth} {self.scene.unit.length} at {formatting.row_names(self.scene)[i]} "
-                f"({state})")
+        return f"{depth}{self._units()[1]} at {self.names[i]} ({state})"
+
+    def _what(self) -> str:
+        """The first line of the summary: the scene, or the problem and its size."""
+        if self.scene is not None:
+            return f"scene: {self.scene.name} ({self.scene.units})"
+        problem = self.problem
+        units = f", {problem.units}" if problem.units else ""
+        return (f"problem: {problem.name or 'unnamed'} ({problem.n} dofs, {problem.m} contact "
+                f"rows, {problem.prescribed.size} prescribed{units})")
+
+    def _reactions(self) -> str:
+        force, _ = self._units()
+        if self.scene is not None:
+            return (f"support reactions{force and ' (' + force.strip() + ')'}: " + ", ".join(
+                f"support[{i}] {formatting.force(r, self.force_scale)}"
+                for i, r in enumerate(self.reactions)))
+        return (f"reactions: total {formatting.force(float(self.reactions.sum()), self.force_scale)}"
+                f"{force} over {self.reactions.size} prescribed dofs")
 
     def summary(self) -> str:
-        """A few lines a person reads: the scene, the method, whether the answer is verified and
-        what that guarantees, the contact forces, the largest penetration, the residuals and
-        the warnings (stress beyond yield)."""
-        unit = self.scene.unit
+        """A few lines a person reads: the scene or problem, the method, whether the answer is
+        verified and what that guarantees, the contact forces, the largest penetration, the
+        reactions, the residuals and the warnings (stress beyond yield)."""
+        force, _ = self._units()
         residuals = ", ".join(f"{name.replace('_', ' ')} {formatting.number(value, '.1e')}"
                               for name, value in self.residuals.items() if value is not None)
-        lines = [f"scene: {self.scene.name} ({self.scene.units})",
+        lines = [self._what(),
                  f"method: {self.label}, {self.contact} contact, {1e3 * self.time:.2f} ms",
                  self._guarantee()]
         if self.contact_force.size:
-            lines += [f"contact forces ({unit.force}): {self._forces()}",
+            lines += [f"contact forces{force and ' (' + force.strip() + ')'}: {self._forces()}",
                       f"largest penetration: {self._penetration()}"]
-        lines += [f"support reactions ({unit.force}): " + ", ".join(
-                      f"support[{i}] {formatting.force(r, self.force_scale)}"
-                      for i, r in enumerate(self.reactions)),
-                  f"residuals (of F and U): {residuals}"]
+        if self.reactions.size:
+            lines.append(self._reactions())
+        lines.append(f"residuals (of F and U): {residuals}")
         if not self.physical:
             lines.append("non-physical: a contact pulls (the negative forces above), which a "
-                         "rigid wall cannot; equality contact holds each node on its wall")
+                         "rigid wall cannot; equality contact holds each row on its gap")
         lines += [f"warning: {w}" for w in self.warnings]
         return formatting.wrap("\n".join(lines))
 
     def _repr_html_(self) -> str:
         """A small table for notebooks: the summary's numbers, one row each."""
-        unit = self.scene.unit
-        rows = [("scene", self.scene.name), ("method", f"{self.label}, {self.contact} contact"),
+        force, _ = self._units()
+        what = self.scene.name if self.scene is not None else (self.problem.name or "unnamed")
+        rows = [("scene" if self.scene is not None else "problem", what),
+                ("method", f"{self.label}, {self.contact} contact"),
                 ("verified", self._verdict()), ("contact force", self._largest()),
                 ("largest residual", formatting.number(max(
                     (v for v in self.residuals.values() if v is not None), default=0.0), ".1e")),
-                ("force error bound",
-                 f"{formatting.number(self.force_error_bound, '.1e')} {unit.force}"),
+                ("force error bound", f"{formatting.number(self.force_error_bound, '.1e')}{force}"),
                 ("time", f"{1e3 * self.time:.2f} ms")]
         if self.contact_force.size:
             rows.insert(4, ("largest penetration", self._penetration()))
@@ -219,15 +240,21 @@ class Result(Reported):
         return f"<table>{body}</table>"
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary (plain floats and lists)."""
+        """JSON-ready dictionary (plain floats and lists): "scene" and "units" name a scene,
+        "problem" and "units" a problem; "element_force", "stress" and "stress_ratio" where
+        the model has bars."""
+        if self.scene is not None:
+            named = {"scene": self.scene.name, "units": self.scene.units}
+        else:
+            named = {"problem": self.problem.name, "units": self.problem.units}
+        bars = ({"element_force": plain(self.element_force), "stress": plain(self.stress),
+                 "stress_ratio": self.stress_ratio} if self.element_force is not None else {})
         return {
-            "scene": self.scene.name, "units": self.scene.units, "method": self.method,
-            "solver": self.solver,
+            **named, "method": self.method, "solver": self.solver,
             "contact": self.contact, "options": plain(self.options),
             "u": plain(self.u), "contact_force": plain(self.contact_force),
             "reactions": plain(self.reactions), "penetration": plain(self.penetration),
-            "element_force": plain(self.element_force), "stress": plain(self.stress),
-            "stress_ratio": self.stress_ratio, "residuals": plain(self.residuals),
+            **bars, "residuals": plain(self.residuals),
             "verified": self.verified, "physical": self.physical, "message": self.message,
             "force_error_bound": plain(self.force_error_bound),
             "displacement_error_bound": plain(self.displacement_error_bound),
@@ -236,6 +263,9 @@ class Result(Reported):
             "iterations": self.iterations, "time": self.time, "timings": plain(self.timings),
             "warnings": list(self.warnings), "info": plain(self.info),
         }
+
+
+ProblemResult = Result  # its former name, for one release (the CHANGELOG says so)
 
 
 def plain(value: Any) -> Any:
@@ -252,19 +282,6 @@ def plain(value: Any) -> Any:
     if isinstance(value, (np.integer, np.bool_)):
         return value.item()
     return value
-
-
-def support_reactions(layout: Layout, forces: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
-    """The force (+x) each support applies: what equilibrium of its node leaves over from
-    the elements on either side (``forces`` per link, 0 between bars), the loads and the
-    contacts there."""
-    nodes = layout.support_nodes
-    right = np.where(nodes < forces.size, forces[np.minimum(nodes, forces.size - 1)], 0.0)
-    left = np.where(nodes > 0, forces[np.maximum(nodes - 1, 0)], 0.0)
-    outside = layout.nodal_loads[nodes]
-    if layout.scene.contacts:  # a bar contact may end at a support; walls may not
-        outside = outside + contact_forces_on_nodes(layout, contact_force)[nodes]
-    return left - right - outside
 
 
 def yield_warning(layout: Layout, stress: np.ndarray) -> tuple[float | None, list[str]]:
@@ -300,54 +317,64 @@ def yield_warning(layout: Layout, stress: np.ndarray) -> tuple[float | None, lis
 
 @dataclass(frozen=True)
 class Checked:
-    """A solution's answer at every node and its check (:func:`checked`): u, λ, the element
-    forces, the reactions, the penetration of every row, and the Check."""
+    """A solution's answer at every node or dof and its check (:func:`checked`): u, λ, the
+    element forces (None without bars), the reactions, the penetration of every row, and the
+    Check."""
 
     u: np.ndarray
     contact_force: np.ndarray
-    element_force: np.ndarray
+    element_force: np.ndarray | None
     reactions: np.ndarray
     penetration: np.ndarray
     check: Check
 
 
-def checked(model: Model, solution: Solution, contact: str,
+def checked(model: ContactModel, solution: Solution, contact: str,
             tolerances: Tolerances = TOLERANCES, natural: bool = True) -> Checked:
     """Derive every quantity from u and λ of a solution, then check it (``natural``: with the
-    natural-map residual, :func:`contactqp.check.check`)."""
+    natural-map residual, :func:`contactqp.check.check_model`)."""
+    lam = np.asarray(solution.contact_force, dtype=float).reshape(-1)
+    if model.layout is None:  # no chain: the general certificate alone
+        u_free = np.asarray(solution.u_free, dtype=float).reshape(-1)
+        found = check_model(model, u_free, lam, contact, tolerances, natural=natural)
+        u = model.full_displacements(u_free)
+        pen = model.C @ u_free - model.g if found.penetration is None else found.penetration
+        return Checked(u, lam, None, model.reactions_of(u, lam), pen, found)
     layout = model.layout
     u = solution.u_nodes
     if u is None or u.shape != (layout.n_nodes,):
         u = model.full_displacements(np.asarray(solution.u_free, dtype=float))
-    lam = np.asarray(solution.contact_force, dtype=float).reshape(-1)
     forces = element_forces(layout, u)
     # reactions are what equilibrium at the supports needs (the force of the elements on each
     # side, less loads and contacts there); the check then tests every section of every bar
     links = link_forces(layout, forces)
     reactions = support_reactions(layout, links, lam)
-    found = check(model, u, lam, reactions, contact, tolerances, element_force=forces,
-                  natural=natural, link_force=links)
+    model, u, lam, reactions = sized(model, u, lam, reactions)
+    found = check_model(model, u[model.free], lam, contact, tolerances, natural=natural,
+                        chain=lambda: chain_bounds(model, u, lam, reactions, contact,
+                                                   tolerances, forces, links))
     pen = penetration(layout, u) if found.penetration is None else found.penetration
     return Checked(u, lam, forces, reactions, pen, found)
 
 
-def make_result(model: Model, solution: Solution, *, method: str, contact: str,
+def make_result(model: ContactModel, solution: Solution, *, method: str, contact: str,
                 options: dict[str, Any], timings: dict[str, float],
                 tolerances: Tolerances = TOLERANCES) -> Result:
     """Build the Result of a solution: derive every quantity from u and λ, then check it."""
     start = time.perf_counter()
     done = checked(model, solution, contact, tolerances)
     found, forces = done.check, done.element_force
-    stress = forces / model.layout.areas
-    ratio, warnings = yield_warning(model.layout, stress)
+    stress, ratio, warnings = None, None, []
+    if forces is not None:
+        stress = forces / model.layout.areas
+        ratio, warnings = yield_warning(model.layout, stress)
     timings = {**timings, "check": time.perf_counter() - start}
     warnings += claim_warnings(solution, found.verified)
     return Result(
         model=model, method=method, solver=solution.solver, contact=contact,
         options=dict(options), u=done.u, contact_force=done.contact_force,
         reactions=done.reactions, penetration=done.penetration, element_force=forces,
-        stress=stress,
-        stress_ratio=ratio, residuals=found.residuals, verified=found.verified,
+        stress=stress, stress_ratio=ratio, residuals=found.residuals, verified=found.verified,
         physical=found.physical, message=found.message,
         force_error_bound=found.force_error_bound,
         displacement_error_bound=found.displacement_error_bound,
@@ -358,5 +385,5 @@ def make_result(model: Model, solution: Solution, *, method: str, contact: str,
     )
 
 
-__all__ = ["Checked", "Reported", "Result", "Solution", "checked", "claim_warnings",
-           "make_result", "plain", "support_reactions"]
+__all__ = ["Checked", "ProblemResult", "Reported", "Result", "Solution", "checked",
+           "claim_warnings", "make_result", "plain"]

@@ -13,15 +13,16 @@ from typing import Any
 import numpy as np
 
 from contactqp.builders import default_scene
-from contactqp.errors import OptionError, SceneError
+from contactqp.errors import OptionError, ProblemError, SceneError, SolverError
 from contactqp.feasibility import equality_conflict
 from contactqp.held import unheld_bars
 from contactqp.methods import Method, checked_options, hull
+from contactqp.methods.base import Solution
 from contactqp.model import Condensed, Model, condensed_model, scene_model
+from contactqp.model.sparse import problem_model
 from contactqp.problem import Problem
-from contactqp.problem_result import ProblemResult
-from contactqp.problem_solve import solve_problem
-from contactqp.result import Result, Solution, make_result
+from contactqp.problem_feasibility import conflicting_rows
+from contactqp.result import Result, make_result
 from contactqp.scene import Scene
 from contactqp.scene_io import load_scene
 
@@ -44,7 +45,7 @@ AUTO_CONDENSE_NODES = 512  # ... and at least this many free nodes (below, conde
 
 def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str = "lagrange",
           contact: str = "inequality", formulation: str = "auto",
-          **options: Any) -> Result | ProblemResult:
+          **options: Any) -> Result:
     """Solve a scene (or a user's own model) by one method and return the checked Result.
 
     Parameters
@@ -52,10 +53,8 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
     scene : Scene, Problem, str, os.PathLike or None
         The scene, the path of a scene file (read by :func:`contactqp.load_scene`), or None
         for the default scene (:func:`contactqp.default_scene`); or a
-        :class:`contactqp.Problem` (K, f, C, g), solved by
-        :func:`contactqp.problem_solve.solve_problem` into a
-        :class:`~contactqp.problem_result.ProblemResult` (every method but nitsche; the
-        formulation stays "auto").
+        :class:`contactqp.Problem` (K, f, C, g: every method but nitsche; the formulation
+        stays "auto"). Either way the same :class:`~contactqp.result.Result`.
     method : str
         One of :data:`contactqp.METHODS`: "lagrange", "penalty", "augmented", "qp", "lemke",
         "pgs", "semismooth_newton" or "nitsche".
@@ -109,10 +108,7 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
         The method could not produce an answer (a singular system, a loop that does not end).
     """
     if isinstance(scene, Problem):
-        if formulation != "auto":
-            raise OptionError(f"formulation={formulation!r} applies to bar scenes; a Problem "
-                              "is solved as given (formulation='auto')")
-        return solve_problem(scene, method, contact, **options)
+        return solve_problem(scene, method, contact, formulation, options)
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
     start = time.perf_counter()
     model = scene_model(scene)  # built once per scene object
@@ -123,6 +119,56 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
     options = {**options, "formulation": formulation} if formulation != "full" else options
     return make_result(model, solution, method=method, contact=contact, options=options,
                        timings={"build": built - start, "solve": solved - built})
+
+
+def solve_problem(problem: Problem, method: Any, contact: Any, formulation: Any,
+                  options: dict[str, Any]) -> Result:
+    """:func:`solve` for a user's problem: its model (built once per Problem,
+    :func:`~contactqp.model.sparse.problem_model`), the method's own refusal where it does not
+    take it, the solve and its check. A solve with ``contact="equality"`` that fails (a
+    SolverError, or an answer the check does not verify) on rows that, held on their gaps, no
+    u meets all at once ends in a ProblemError naming them
+    (:mod:`contactqp.problem_feasibility`)."""
+    spec, options = checked_options(method, contact, formulation, options)
+    if formulation != "auto":
+        raise OptionError(f"formulation={formulation!r} applies to bar scenes; a Problem "
+                          "is solved as given (formulation='auto')")
+    start = time.perf_counter()
+    model = problem_model(problem)
+    refusal = spec.accepts(model, contact, options)
+    if refusal:
+        raise OptionError(refusal)
+    built = time.perf_counter()
+    # every row held on its gap: a conflict the Problem, checking its rows by their kinds, did
+    # not look for
+    held = contact == "equality" and not problem.equality.all()
+    try:
+        solution = solve_model(model, spec, _kind(model, contact), "full", options)
+    except SolverError:
+        if held:
+            _refuse_rows_that_leave_no_u(problem)
+        raise
+    solved = time.perf_counter()
+    result = make_result(model, solution, method=spec.name, contact=contact, options=options,
+                         timings={"build": built - start, "solve": solved - built})
+    if held and not result.verified:
+        _refuse_rows_that_leave_no_u(problem)
+    return result
+
+
+def _kind(model: Any, contact: str) -> str:
+    """Rows that are all equalities are solved as equality contact."""
+    return "equality" if model.n_contacts and model.equality.all() else contact
+
+
+def _refuse_rows_that_leave_no_u(problem: Problem) -> None:
+    """After a failed solve with every row held on its gap (``contact="equality"``), which
+    the problem's own check of its rows (by their kinds) did not cover: a ProblemError naming
+    rows that no u meets all at once, if there are such."""
+    conflict = conflicting_rows(problem.C, problem.g, np.ones(problem.m, dtype=bool),
+                                problem.names)
+    if conflict:
+        raise ProblemError(conflict)
 
 
 def checked_call(scene: Scene | str | os.PathLike | None, method: Any, contact: Any,

@@ -16,9 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from contactqp import _validate
 from contactqp._validate import one_line
 from contactqp.errors import ProblemError
-from contactqp.fem._arguments import nodes_within, poisson_ratio, positive
+from contactqp.fem._arguments import at_least_zero, nodes_within, poisson_ratio, positive
 from contactqp.fem.elasticity import (
     dof_coordinates,
     plane_strain_stiffness,
@@ -193,11 +194,14 @@ def measure(model: CylinderModel, contact_force: np.ndarray,
 
     Raises
     ------
+    ProblemError
+        ``contact_force`` is not one finite number per row, or ``resolution`` is negative.
     ValueError
         The contact spans fewer than two rows (refine), or reaches the zone's last row (widen
         the zone: the true contact may extend past it).
     """
-    force = np.asarray(contact_force, dtype=float)
+    force = _validate.vector("contact_force", contact_force, model.x.size)
+    resolution = at_least_zero("measure", "resolution", resolution)
     # the strip in contact is the run of pushing rows from the lowest point
     open_rows = np.flatnonzero(force <= max(PUSHING * force.max(), resolution))
     last = int(open_rows[0]) - 1 if open_rows.size else force.size - 1

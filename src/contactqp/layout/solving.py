@@ -2,7 +2,7 @@
 numbering, each made once per layout: the loads summed along the chain and their force scale,
 the press-fit forces, the compliance each row sees with the supports held, the walls of each
 side, the nodes of the outside forces, and the sets the check keeps per held set
-(:func:`contactqp.runs.kept`). :class:`SolvingArrays` is a base of Layout; the arrays that do
+(:func:`contactqp.check.chain.spans.kept`). :class:`SolvingArrays` is a base of Layout; the arrays that do
 not depend on the load values or the gaps are shared by :meth:`Layout.with_values`
 (:data:`contactqp.layout.numbering.TOPOLOGY`, :data:`~contactqp.layout.numbering.SAME_GAPS`).
 """
@@ -136,7 +136,7 @@ class SolvingArrays:
     @cached_property
     def held_cache(self) -> dict:
         """What the check works out from a set of held nodes alone, for the last few sets
-        (:func:`contactqp.runs.kept`): it depends on where things sit and on the stiffnesses,
+        (:func:`contactqp.check.chain.spans.kept`): it depends on where things sit and on the stiffnesses,
         never on the load values or the gaps, so the layouts of :meth:`with_values` share it."""
         return {}
 

@@ -1,11 +1,13 @@
 """Every way of solving a contact problem, and their registry.
 
-A method is a function ``(problem, contact, **options) -> Solution``: ``problem`` a
-:class:`~contactqp.model.Model` or a :class:`~contactqp.model.Condensed` one (K, P, C, g),
-``contact`` "inequality" or "equality". :data:`METHODS` names each method's options, with the
-check each value must pass, and the formulations it solves; :func:`checked_options` applies
-them, so that the methods themselves take their options as given. The pipeline that builds the
-problem and checks the answer is :mod:`contactqp.solve`.
+A method is a function ``(model, contact, **options) -> Solution``: ``model`` any model of the
+protocol (:mod:`contactqp.model.base`: a bar scene's chain, its condensed chain, or a user's
+sparse model; a method takes a chain's fast path where ``model.layout`` says it is one),
+``contact`` "inequality" or "equality". :data:`METHODS`, the one registry, names each
+method's options, with the check each value must pass, the formulations it solves and the
+models it accepts; :func:`checked_options` applies them, so that the methods themselves take
+their options as given. The pipeline that builds the model and checks the answer is
+:mod:`contactqp.solve`.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from typing import Any
 
 from contactqp.errors import OptionError
 from contactqp.methods.augmented import DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, solve_augmented
+from contactqp.methods.base import Solution
 from contactqp.methods.complementarity import (
     NCP_FUNCTIONS,
     solve_lemke,
@@ -27,7 +30,6 @@ from contactqp.methods.nitsche import THETAS, solve_nitsche
 from contactqp.methods.penalty import solve_penalty
 from contactqp.methods.qp import BACKENDS, solve_qp
 from contactqp.methods.qp.settings import ACCURACIES
-from contactqp.result import Solution
 from contactqp.values import flag, positive_number, whole_number
 
 CONTACT_KINDS = ("inequality", "equality")  # the contact rows as C u <= g, or as C u = g
@@ -99,23 +101,60 @@ PENALTY = _or_none(lambda v: positive_number("penalty", v, "force per length, e.
                                              OptionError))
 
 
+def _any_model(model: Any, contact: str, options: dict[str, Any]) -> str | None:
+    """Every model: no reason to refuse."""
+    return None
+
+
+def _scenes_options(*names: str) -> Callable[[Any, str, dict[str, Any]], str | None]:
+    """Options that only a chain (a bar scene's model) has a meaning for."""
+    def accepts(model: Any, contact: str, options: dict[str, Any]) -> str | None:
+        given = [name for name in names if name in options]
+        if given and model.layout is None:
+            return f"option {given[0]!r} applies to bar scenes only"
+        return None
+    return accepts
+
+
+def _one_kind_of_row(method: str) -> Callable[[Any, str, dict[str, Any]], str | None]:
+    def accepts(model: Any, contact: str, options: dict[str, Any]) -> str | None:
+        equality = model.equality
+        if contact != "equality" and equality.any() and not equality.all():
+            return (f"{method} solves the LCP of inequality rows (or the linear system of "
+                    "equality rows), and this problem mixes both: use lagrange")
+        return None
+    return accepts
+
+
+NITSCHE_NEEDS = ("nitsche needs the traction σ(u)·n on the contact boundary, which a model of "
+                 "matrices K, f, C, g does not carry; use lagrange, penalty, augmented or qp")
+
+
+def _chains_only(model: Any, contact: str, options: dict[str, Any]) -> str | None:
+    return NITSCHE_NEEDS if model.layout is None else None
+
+
 @dataclass(frozen=True)
 class Method:
     """A method: its name, its function, its options (name -> the check its value must pass,
-    returning the value to use), the formulations it solves and one line on what it does."""
+    returning the value to use), the formulations it solves, one line on what it does, and
+    what models it accepts (``accepts(model, contact, options)``: None, or the one line that
+    says why not)."""
 
     name: str
     solve: Callable[..., Solution]
     options: dict[str, Callable[[Any], Any]]
     formulations: tuple[str, ...]
     summary: str
+    accepts: Callable[[Any, str, dict[str, Any]], str | None] = _any_model
 
 
 METHODS: dict[str, Method] = {
     "lagrange": Method("lagrange", solve_lagrange,
                        {"max_iterations": ITERATIONS,
                         "active_set": _choice("active_set", ACTIVE_SETS)}, FORMULATIONS,
-                       "the saddle-point system [[K, Cᵀ], [C, 0]], an active-set loop"),
+                       "the saddle-point system [[K, Cᵀ], [C, 0]], an active-set loop",
+                       _scenes_options("active_set")),
     "penalty": Method("penalty", solve_penalty, {"penalty": PENALTY, "max_iterations": ITERATIONS},
                       ("full", "condensed"), "K + ε CᵀC, the penalty on the walls passed"),
     "augmented": Method(
@@ -133,22 +172,26 @@ METHODS: dict[str, Method] = {
          "verbose": lambda v: flag("verbose", v, OptionError)},
         FORMULATIONS, "a QP solver, whose dual values are the contact forces"),
     "lemke": Method("lemke", solve_lemke, {"max_iterations": PIVOTS}, ("full", "condensed"),
-                    "the LCP in the contact forces by Lemke's pivoting (exact, finite)"),
+                    "the LCP in the contact forces by Lemke's pivoting (exact, finite)",
+                    _one_kind_of_row("lemke")),
     "pgs": Method("pgs", solve_pgs,
                   {"relaxation": _relaxation, "tolerance": _residual, "max_iterations": SWEEPS},
                   ("full", "condensed"),
-                  "the LCP by projected Gauss–Seidel (PSOR with relaxation ω), iterative"),
+                  "the LCP by projected Gauss–Seidel (PSOR with relaxation ω), iterative",
+                  _one_kind_of_row("pgs")),
     "semismooth_newton": Method(
         "semismooth_newton", solve_semismooth_newton,
         {"ncp": _choice("ncp", NCP_FUNCTIONS), "tolerance": _residual,
          "max_iterations": _steps},
-        ("full", "condensed"), "the LCP by Newton on an NCP function (min or Fischer–Burmeister)"),
+        ("full", "condensed"), "the LCP by Newton on an NCP function (min or Fischer–Burmeister)",
+        _one_kind_of_row("semismooth_newton")),
     "nitsche": Method(
         "nitsche", solve_nitsche,
         {"gamma0": lambda v: positive_number("gamma0", v, "γ = γ₀·EA/h, dimensionless",
                                              OptionError),
          "theta": _theta, "max_iterations": _steps},
-        ("full",), "Nitsche's method for walls at a bar's end (γ₀, θ), a semismooth system"),
+        ("full",), "Nitsche's method for walls at a bar's end (γ₀, θ), a semismooth system",
+        _chains_only),
 }
 
 

@@ -17,10 +17,11 @@ import numpy as np
 
 from contactqp import linalg
 from contactqp.methods._active_set import DECISION_RTOL, active_set_loop, pinning
-from contactqp.model import Condensed, Model, wall_stiffness, without_circulation
-from contactqp.result import Solution
+from contactqp.methods.base import Solution
+from contactqp.methods.penalty import equalities, penalised_solve
+from contactqp.model import Condensed, ContactModel, Model, wall_stiffness, without_circulation
 
-PENALTY_PER_STIFFNESS = 100.0  # default ε: this many times the stiffness the walls see
+AUGMENTED_PER_STIFFNESS = 100.0  # default ε: this many times the stiffness the rows see
 DEFAULT_TOLERANCE = 1e-10  # stop when an update changes λ by less than this, relative
 DEFAULT_MAX_ITERATIONS = 100
 
@@ -33,7 +34,7 @@ def default_penalty(model: Model | Condensed) -> float:
     Measured: 100 × the stiffness the walls see together (a smaller σ) took 100 updates
     on two zero-gap walls joined by an element 300 times stiffer than the bar before them."""
     seen = wall_stiffness(model)
-    return PENALTY_PER_STIFFNESS * (1.0 if seen is None else seen)
+    return AUGMENTED_PER_STIFFNESS * (1.0 if seen is None else seen)
 
 
 def solve_augmented(model: Model | Condensed, contact: str, *, penalty: float | None = None,
@@ -43,6 +44,9 @@ def solve_augmented(model: Model | Condensed, contact: str, *, penalty: float | 
     updates until one changes λ by at most ``tolerance`` × max(‖λ‖, ‖P‖), or until an update
     no longer shrinks the change (round-off: status says so). If that takes more than
     ``max_iterations`` updates the last iterate is returned with ``claimed_success`` False."""
+    if model.layout is None:  # no chain: a penalty per row, one factorisation per set
+        return _general(model, contact, penalty=penalty, tolerance=tolerance,
+                        max_iterations=max_iterations)
     eps = default_penalty(model) if penalty is None else penalty
     K, P, C, g = model.K, model.P, model.C, model.g
     unilateral = contact == "inequality"
@@ -87,3 +91,39 @@ def solve_augmented(model: Model | Condensed, contact: str, *, penalty: float | 
     return Solution(u, lam, solver="augmented", iterations=max_iterations,
                     status=f"not converged in {max_iterations} updates", claimed_success=False,
                     info={"penalty": eps, "inner_solves": inner_solves})
+
+
+def _general(model: ContactModel, contact: str, *, penalty: float | None = None,
+             tolerance: float = DEFAULT_TOLERANCE,
+             max_iterations: int = DEFAULT_MAX_ITERATIONS) -> Solution:
+    """The augmented Lagrangian (Uzawa) with ε_i (module docstring): for fixed λ the set of
+    rows with λ_i + ε_i(C_i u − g_i) > 0 is settled, then λ ← max(0, that) (equality rows: no
+    max), until an update changes λ by at most ``tolerance`` × max(‖λ‖, F)."""
+    eps = (AUGMENTED_PER_STIFFNESS * model.row_stiffness if penalty is None
+           else np.full(model.n_contacts, float(penalty)))
+    solve, equality = penalised_solve(model, eps, {}), equalities(model, contact)
+    lam, F = np.zeros(model.n_contacts), model.force_scale
+
+    def step(active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        u = solve(active, eps * model.g - lam)
+        return u, lam + eps * (model.C @ u - model.g)
+
+    def update(active: np.ndarray, u: np.ndarray, trial: np.ndarray) -> np.ndarray:
+        band = DECISION_RTOL * max(float(np.abs(trial).max(initial=0.0)), F)
+        return np.where(active, trial > -band, trial > band) | equality
+
+    previous = np.inf
+    for iteration in range(1, max_iterations + 1):
+        u, trial, _ = active_set_loop(model.n_contacts, step, update, method="augmented",
+                                      start=equality | (lam > 0.0))
+        new_lam = np.where(equality, trial, np.maximum(trial, 0.0))
+        change = float(np.abs(new_lam - lam).max(initial=0.0))
+        lam = new_lam
+        converged = change <= tolerance * max(float(np.abs(lam).max(initial=0.0)), F)
+        if converged or (change >= previous and iteration > 2):
+            status = "solved" if converged else "stalled at round-off"
+            return Solution(u, lam, solver="augmented", iterations=iteration, status=status,
+                            info={"penalty": float(eps.max(initial=0.0))})
+        previous = change
+    return Solution(u, lam, solver="augmented", iterations=max_iterations,
+                    status=f"not converged in {max_iterations} updates", claimed_success=False)

@@ -31,12 +31,11 @@ import math
 
 import numpy as np
 
-from contactqp.check import natural_map
 from contactqp.errors import OptionError, SolverError
+from contactqp.methods.base import Solution
 from contactqp.methods.lemke import lemke, unit_diagonal
-from contactqp.model import Condensed, Model, without_circulation
-from contactqp.model.sparse import SparseModel
-from contactqp.result import Solution
+from contactqp.model import Condensed, ContactModel, Model, without_circulation
+from contactqp.model.base import natural_map
 
 LCP_ROWS = 2000  # contact rows up to which the LCP is formed (W dense, rows x rows)
 LCP_ENTRIES = 2**24  # ... and free nodes x rows, the dense K⁻¹Cᵀ it builds (128 MB)
@@ -55,13 +54,13 @@ ARMIJO = 1e-4  # sufficient decrease of ½‖Φ‖² along the Newton step
 HELD_OPEN = 1e-9  # a held row left open by more than this (of q's largest entry) is let go
 
 
-def contact_lcp(problem: Model | Condensed | SparseModel
+def contact_lcp(problem: Model | Condensed | ContactModel
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(W, q, K⁻¹P, K⁻¹Cᵀ) of a problem (module docstring); a SolverError past LCP_ROWS."""
     rows = problem.n_contacts
     if rows > LCP_ROWS or problem.n_free * rows > LCP_ENTRIES:
         # a user's problem has dofs, a bar scene nodes: the refusal speaks the caller's words
-        what, unknowns = (("problem", "free dofs") if isinstance(problem, SparseModel)
+        what, unknowns = (("problem", "free dofs") if problem.layout is None
                           else ("scene", "free nodes"))
         raise SolverError(f"the complementarity methods form the dense flexibility W = C K⁻¹ Cᵀ "
                           f"(rows x rows) and K⁻¹Cᵀ: up to {LCP_ROWS} contact rows and "
@@ -86,17 +85,15 @@ def _answer(problem: Model | Condensed, contact: str, solver: str, z_solver) -> 
     info)`` on the scaled problem); equality contact by one linear solve."""
     W, q, u_free, columns = contact_lcp(problem)
     if contact == "equality":
-        try:
-            lam = np.linalg.solve(W, -q) if q.size else np.zeros(0)
-        except np.linalg.LinAlgError:
-            raise SolverError(f"{solver}: W = C K⁻¹ Cᵀ is singular (rows that hold the same "
-                              "nodes twice)") from None
+        # least squares: rows that repeat each other's constraint leave W singular, and the
+        # least-norm forces are as good as any (an inconsistent set is named by the caller)
+        lam = np.linalg.lstsq(W, -q, rcond=None)[0] if q.size else np.zeros(0)
         return Solution(u_free - columns @ lam, lam, solver=solver, status="solved")
     M, q_scaled, D = unit_diagonal(W, q)
     z, iterations, converged, status, info = z_solver(M, q_scaled)
     residual = natural_map(z, M @ z + q_scaled, q_scaled)
     # a user's problem has no chain whose loops of rows could carry a force round
-    lam = D * z if isinstance(problem, SparseModel) else without_circulation(problem, D * z)
+    lam = D * z if problem.layout is None else without_circulation(problem, D * z)
     return Solution(u_free - columns @ lam, lam, solver=solver, iterations=iterations,
                     status=status, claimed_success=converged,
                     info={**info, "natural_map": residual})

@@ -36,6 +36,7 @@ from dataclasses import replace
 import numpy as np
 
 from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
+from contactqp.methods.base import Solution
 from contactqp.methods.minorant import minorant_vertices
 from contactqp.methods.stretch import Stretch, displacements
 from contactqp.model import (
@@ -46,7 +47,6 @@ from contactqp.model import (
     run_starts,
     segment_reduce,
 )
-from contactqp.result import Solution
 
 
 def applies(model: object, contact: str) -> bool:

@@ -25,56 +25,21 @@ from contactqp.methods._active_set import (
     displacement_tolerance,
     pinning,
 )
+from contactqp.methods.base import Solution
 from contactqp.methods.complementarity import solve_lemke
+from contactqp.methods.schur import solve_schur
 from contactqp.model import (
     Condensed,
     Model,
     element_forces,
     elongation_rows,
 )
-from contactqp.result import Solution
-
-
-def saddle_point_system(K: sp.sparray, C: sp.sparray) -> sp.csr_array:
-    """The sparse saddle-point matrix [[K, Cᵀ], [C, 0]], assembled from the entries (scipy's
-    block_array took ~0.6 ms per active-set step on the 4-element default scene)."""
-    n, m = K.shape[0], C.shape[0]
-    Kc, Cc = sp.coo_array(K), sp.coo_array(C)
-    row = np.concatenate((Kc.row, Cc.col, n + Cc.row))
-    col = np.concatenate((Kc.col, n + Cc.row, Cc.col))
-    data = np.concatenate((Kc.data, Cc.data, Cc.data))
-    return sp.csr_array(sp.coo_array((data, (row, col)), shape=(n + m, n + m)))
-
-
-def banded_order(C: sp.csr_array, n: int) -> np.ndarray:
-    """An ordering of [D; λ] that puts each multiplier right after the last unknown of its
-    row, so that the saddle-point matrix of a chain is banded."""
-    last = np.maximum.reduceat(C.indices, C.indptr[:-1]) if C.shape[0] else np.zeros(0, int)
-    keys = np.concatenate((2 * np.arange(n), 2 * last + 1))
-    return np.argsort(keys, kind="stable")
-
-
-def solve_saddle_point(K: sp.sparray, P: np.ndarray, C: sp.csr_array,
-                       g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Solve [[K, Cᵀ], [C, 0]] [D; λ] = [P; g] in one sparse solve; returns (D, λ).
-
-    The rows of C (and g) are solved scaled by the power of 2 nearest above K's largest
-    diagonal entry, and λ scaled back: the same system exactly, but its LU pivots weigh the
-    contact rows as K's own (measured: a random scene of two bars with elements of 1.7e5 to
-    2.8e12 N/m, a wall and a bar contact active, unscaled: a wall's force 44 N off of 35 kN and
-    its node 1.2e-9 m off its gap; scaled: 3e-5 N and at the gap)."""
-    n = K.shape[0]
-    scale = row_scale(K)
-    x = linalg.solve(saddle_point_system(K, C * scale), np.concatenate((P, g * scale)),
-                     order=banded_order(C, n))
-    return x[:n], x[n:] * scale
-
-
-def row_scale(K: sp.sparray) -> float:
-    """The power of 2 nearest above K's largest diagonal entry (1 for an empty or zero K): the
-    contact rows' scale in a saddle-point solve (scaling by it is exact)."""
-    top = float(np.abs(K.diagonal()).max(initial=0.0))
-    return float(np.ldexp(1.0, np.frexp(top)[1])) if 0.0 < top < np.inf else 1.0
+from contactqp.model.saddle import (  # noqa: F401 - banded_order, row_scale: their former place
+    banded_order,
+    row_scale,
+    saddle_point_system,
+    solve_saddle_point,
+)
 
 
 def solve_strain_saddle_point(model: Model, active: np.ndarray) -> tuple[np.ndarray, np.ndarray,
@@ -169,6 +134,8 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
     """Lagrange multipliers; ``contact`` "equality" (every wall holds) or "inequality";
     ``formulation`` "full" (unknowns u) or "strain" (u and the element elongations e, tied by
     equality rows whose multipliers, the element forces, go to the Solution's info)."""
+    if model.layout is None:  # no chain: the loop on the rows' Schur complement
+        return solve_schur(model, contact, max_iterations=max_iterations)
     P, C, g = model.P, model.C, model.g  # K (sparse) only where the loop needs it
     element_force: list[np.ndarray] = []
 

@@ -36,8 +36,8 @@ import scipy.sparse as sp
 from contactqp import linalg
 from contactqp.errors import OptionError, SolverError
 from contactqp.methods._active_set import pinning
+from contactqp.methods.base import Solution
 from contactqp.model import Model
-from contactqp.result import Solution
 
 THETAS = (1.0, 0.0, -1.0)
 DEFAULT_GAMMA0 = 100.0

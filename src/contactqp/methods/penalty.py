@@ -6,13 +6,23 @@ set is stable). The answer always leaves a penetration of about λ/ε.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+import scipy.sparse as sp
 
 from contactqp import linalg
+from contactqp.errors import SolverError
 from contactqp.methods import hull
-from contactqp.methods._active_set import active_set_loop, displacement_tolerance, pinning
-from contactqp.model import Condensed, Model, wall_stiffness
-from contactqp.result import Solution
+from contactqp.methods._active_set import (
+    DECISION_RTOL,
+    active_set_loop,
+    displacement_tolerance,
+    pinning,
+)
+from contactqp.methods.base import Solution
+from contactqp.model import Condensed, ContactModel, Model, wall_stiffness
+from contactqp.model.sparse import factorise
 
 TEXTBOOK_PENALTY = 1e14  # N/m, the textbook example's ε (in SI units: penalty=1e14)
 PENALTY_PER_STIFFNESS = 1e6  # default ε: this many times the stiffness the walls see
@@ -34,6 +44,8 @@ def solve_penalty(model: Model | Condensed, contact: str, *, penalty: float | No
                   max_iterations: int | None = None) -> Solution:
     """Penalty ``penalty`` (ε, force per length in the scene's units; default
     :func:`default_penalty`); ``contact`` "equality" or "inequality"."""
+    if model.layout is None:  # no chain: a penalty per row, one factorisation per set
+        return _general(model, contact, penalty=penalty, max_iterations=max_iterations)
     eps = default_penalty(model) if penalty is None else penalty
     K, P, C, g = model.K, model.P, model.C, model.g
 
@@ -77,3 +89,51 @@ def hull_start(model: Model | Condensed) -> np.ndarray | None:
         return None
     solution, reached = found
     return solution.contact_force > 0.0 if solution is not None else reached
+
+
+def penalised_solve(model: ContactModel, eps: np.ndarray, cache: dict[bytes, Any]):
+    """u(active, shift) = (K + C_AᵀE C_A)⁻¹ (P + C_Aᵀ shift_A): one factorisation per set."""
+    def solve(active: np.ndarray, shift: np.ndarray) -> np.ndarray:
+        key = active.tobytes()
+        if key not in cache:
+            C_A = model.C[active]
+            try:
+                cache[key] = factorise(sp.csc_matrix(
+                    model.K + C_A.T @ sp.diags_array(eps[active]) @ C_A))
+            except RuntimeError:  # a zero pivot: K is singular along a mode no row in A holds
+                raise SolverError(
+                    f"K + εC_AᵀC_A is singular with {int(active.sum())} rows in contact: K "
+                    "leaves a mode free that they do not hold (lagrange and qp solve a K held "
+                    "by contact alone)") from None
+        return cache[key].solve(model.P + model.C[active].T @ shift[active])
+    return solve
+
+
+def equalities(model: ContactModel, contact: str) -> np.ndarray:
+    return model.equality | (contact == "equality")
+
+
+def _general(model: ContactModel, contact: str, *, penalty: float | None = None,
+             max_iterations: int | None = None) -> Solution:
+    """The penalty on a model with no chain: K + C_AᵀE C_A on the rows passed (E = diag ε_i,
+    ε_i = PENALTY_PER_STIFFNESS × s_i, s_i the stiffness row i sees,
+    :attr:`~contactqp.model.base.ContactModel.row_stiffness`; a given ``penalty`` is one ε for
+    every row), until the set of passed rows settles: one factorisation per set."""
+    eps = (PENALTY_PER_STIFFNESS * model.row_stiffness if penalty is None
+           else np.full(model.n_contacts, float(penalty)))
+    solve, equality = penalised_solve(model, eps, {}), equalities(model, contact)
+    g, U = model.g, model.displacement_scale
+
+    def step(active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        u = solve(active, eps * g)
+        return u, np.where(active, eps * (model.C @ u - g), 0.0)
+
+    def update(active: np.ndarray, u: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        pen, tol = model.C @ u - g, DECISION_RTOL * U
+        return np.where(active, pen > -tol, pen > tol) | equality
+
+    u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="penalty",
+                                         max_iterations=max_iterations,
+                                         start=equality | (model.C @ model.free_displacement > g))
+    return Solution(u, lam, solver="penalty", iterations=iterations,
+                    info={"penalty": float(eps.max(initial=0.0))})

@@ -24,117 +24,15 @@ rows, 80 in contact): 5 sets, 88 rows solved for.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
-import scipy.sparse as sp
 
-from contactqp.errors import SolverError
 from contactqp.methods._active_set import DECISION_RTOL, active_set_loop
+from contactqp.methods.base import Solution
+from contactqp.model.schur import correction, on_set
 from contactqp.model.sparse import SparseModel
-from contactqp.result import Solution
 
-PSEUDO_INVERSE_RTOL = 1e-12  # eigenvalues of the scaled W_AA below this × the largest: redundant
 ENTER_MIN = 64  # at least this many rows may enter in one step
 ENTER_FACTOR = 1.0  # ... or this many times the set's size
-
-
-def small_solver(W: np.ndarray) -> tuple[Callable[[np.ndarray], np.ndarray], bool]:
-    """(a function rhs -> λ solving W λ = rhs, whether W is singular): W symmetric positive
-    semidefinite (rows x rows), scaled to a unit diagonal, by Cholesky, or where a pivot
-    falls below PSEUDO_INVERSE_RTOL (rows that repeat each other's constraint: redundant
-    rows, whose forces the answer does not fix) the least-norm solution from the
-    eigen-decomposition. (Not the eigen-decomposition always: on the benchmark's W
-    it ran 100 times slower than on a random matrix of its size, 0.25 s at 80 rows, where
-    Cholesky takes 0.2 ms.)"""
-    diagonal = np.diagonal(W)
-    if not np.all(diagonal > 0.0):
-        raise SolverError("a contact row sees no flexibility (C_i K⁻¹ C_iᵀ <= 0)")
-    import scipy.linalg  # at the first solve, not at start-up
-
-    d = 1.0 / np.sqrt(diagonal)
-    scaled = d[:, None] * W * d[None, :]
-    try:
-        factor = scipy.linalg.cho_factor(scaled, lower=True, check_finite=False)
-        if np.diagonal(factor[0]).min() ** 2 > PSEUDO_INVERSE_RTOL:
-            return (lambda rhs: d * scipy.linalg.cho_solve(factor, d * rhs, check_finite=False),
-                    False)
-    except np.linalg.LinAlgError:
-        pass
-    values, vectors = np.linalg.eigh(scaled)
-    keep = values > PSEUDO_INVERSE_RTOL * values.max()
-    vectors, values = vectors[:, keep], values[keep]
-    return lambda rhs: d * (vectors @ ((vectors.T @ (d * rhs)) / values)), True
-
-
-def small_solve(model: SparseModel, rows: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """W_AA⁻¹ rhs for the rows ``rows``: the solver of the last set asked for is kept (the
-    loop's last set, the check's and each refinement step solve with the same W)."""
-    if not rows.size:
-        return np.zeros(0)
-    key = rows.tobytes()
-    cache = model.cache
-    if cache.solver is None or cache.solver[0] != key:
-        cache.solver = (key, *small_solver(model.flexibility(rows)))
-    return cache.solver[1](rhs)
-
-
-def redundant(model: SparseModel, rows: np.ndarray) -> bool:
-    """Whether the rows' W_AA is singular: rows that repeat each other's constraint, so that
-    the answer fixes their forces on the dofs, Cᵀλ, but not each row's."""
-    if not rows.size or model.factor is None:
-        return False
-    small_solve(model, rows, np.zeros(rows.size))
-    return bool(model.cache.solver[2])
-
-
-def on_set(model: SparseModel, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(u on the free dofs, λ per row) with the rows in ``active`` held on their gaps and the
-    others carrying nothing: the equality-constrained problem, exactly (module docstring)."""
-    lam = np.zeros(model.n_contacts)
-    rows = np.flatnonzero(active)
-    if model.factor is None:  # K singular, held by contact rows: the saddle-point system
-        u, lam[rows] = saddle_solve(model, rows, model.P, model.g[rows])
-        return u, lam
-    u0 = model.free_displacement
-    if not rows.size:
-        return u0.copy(), lam
-    lam[rows] = small_solve(model, rows, model.C[rows] @ u0 - model.g[rows])
-    return model.solve_K(model.P - model.C.T @ lam), lam
-
-
-def saddle_solve(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray]:
-    """(u, λ_rows) with K u + C_Aᵀλ = force and C_A u = gap, by one sparse LU of
-    [[K, C_Aᵀ], [C_A, 0]]: for a K that only contact rows hold (no factorisation of K alone
-    exists). A SolverError where the rows do not hold what K leaves free."""
-    import scipy.sparse.linalg as spla  # at the first solve, not at start-up
-
-    C_A = model.C[rows]
-    matrix = sp.csc_matrix(sp.bmat([[model.K, C_A.T], [C_A, None]]))
-    try:
-        x = spla.splu(matrix).solve(np.concatenate((force, gap)))
-    except RuntimeError:
-        raise SolverError(f"K is singular and the {rows.size} rows held do not hold what it "
-                          "leaves free") from None
-    return x[: model.n_free], x[model.n_free:]
-
-
-def correction(model: SparseModel, rows: np.ndarray, residual: np.ndarray,
-                       gap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(δλ, δu) with K δu + C_Aᵀδλ = r (a residual force on the free dofs) and C_A δu = s
-    (``gap``, the rows' residual C_A u − g_A; default 0): δλ = W_AA⁻¹ (C_A K⁻¹ r − s),
-    δu = K⁻¹(r − C_Aᵀ δλ) (two solves; the saddle-point system where K is singular)."""
-    if model.factor is None:
-        du, dlam = saddle_solve(model, rows, residual,
-                                np.zeros(rows.size) if gap is None else gap)
-        return dlam, du
-    y = model.solve_K(residual)
-    if not rows.size:
-        return np.zeros(0), y
-    rhs = model.C[rows] @ y - (0.0 if gap is None else gap)
-    dlam = small_solve(model, rows, rhs)
-    return dlam, model.solve_K(residual - model.C[rows].T @ dlam)
 
 
 def entering(model: SparseModel, active: np.ndarray, u: np.ndarray, lam: np.ndarray
@@ -196,5 +94,4 @@ def _info(model: SparseModel) -> dict[str, int]:
     return {"columns": model.cache.solves}
 
 
-__all__ = ["correction", "on_set", "redundant", "refined", "saddle_solve", "small_solve",
-           "small_solver", "solve_schur"]
+__all__ = ["refined", "solve_schur"]

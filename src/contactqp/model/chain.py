@@ -15,19 +15,31 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 
 from contactqp import linalg
 from contactqp.errors import SceneError, SolverError
-from contactqp.layout import Layout, largest
-from contactqp.scene import Scene
+from contactqp.layout import (
+    Layout,
+    contact_forces_on_nodes,
+    element_forces,
+    largest,
+    link_forces,
+    penetration,
+)
+from contactqp.model.base import (
+    ContactModel,
+    ScaleTerms,
+    balanced_by_contact,
+    first_step_forces,
+)
+from contactqp.scene import Scene, row_names
 
 
 @dataclass(frozen=True, eq=False)
-class Model:
+class Model(ContactModel):
     """The algebra of a scene (module docstring).
 
     Attributes
@@ -176,22 +188,118 @@ class Model:
         self.__dict__["free_displacement"] = solved[:, -1]
         return solved[:, :-1] if rhs.ndim == 2 else solved[:, 0]
 
-    @cached_property
-    def force_scale(self) -> float:
-        """F: the scene's force scale, from the loads and the prescribed gaps alone (never from
-        an answer): the largest force the loads put through any cut of a bar
-        (:func:`~contactqp.model.layout.load_force_scale`), and for a wall that starts past
-        its node (gap < 0) the force that pushes the node back, abs(gap) × the seen stiffness
-        with the supports held. In a scene that nothing loads (the answer is u = 0, λ = 0) it
-        is the softest element's stiffness times :attr:`displacement_scale`."""
-        layout = self.layout
-        return float(force_scale_rule(layout.load_scale, layout.press_fit_force,
-                                      layout.softest, self.displacement_scale))
+    # --- the protocol (contactqp.model.base)
+    @property
+    def equality(self) -> np.ndarray:
+        """No row of a scene is an equality of its own (``contact="equality"`` holds them all)."""
+        return np.zeros(self.n_contacts, dtype=bool)
 
     @cached_property
-    def displacement_scale(self) -> float:
-        """U: the scene's displacement scale (:func:`displacement_scale`)."""
-        return displacement_scale(self.held.free_displacement, self.g, self.layout)
+    def row_names(self) -> tuple[str, ...]:
+        return tuple(row_names(self.scene))
+
+    @property
+    def units(self) -> tuple[str, str]:
+        unit = self.scene.unit
+        return unit.force, unit.length
+
+    @property
+    def singular(self) -> bool:
+        """Whether a bar has no support (K singular: contact alone holds it)."""
+        return bool(self.floating)
+
+    def imbalance(self, u_free: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
+        """K u − P + Cᵀλ over the free nodes, from K's band (no sparse product)."""
+        band = self.band
+        out = band[0] * u_free
+        if u_free.size > 1:
+            out[:-1] += band[1, :-1] * u_free[1:]
+            out[1:] += band[1, :-1] * u_free[:-1]
+        out -= self.P
+        if self.C.nnz:
+            out += self.C.T @ contact_force
+        return out
+
+    def reactions_of(self, u: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
+        """Each support's force (+x) for displacements ``u`` of every node (statics)."""
+        links = link_forces(self.layout, element_forces(self.layout, u))
+        return support_reactions(self.layout, links, contact_force)
+
+    def support_change(self, du: np.ndarray) -> np.ndarray:
+        """The supports' forces of a move ``du`` of the free nodes (statics, no load)."""
+        layout = self.layout
+        links = link_forces(layout, element_forces(layout, self.full_displacements(du)))
+        nodes = layout.support_nodes
+        right = np.where(nodes < links.size, links[np.minimum(nodes, links.size - 1)], 0.0)
+        left = np.where(nodes > 0, links[np.maximum(nodes - 1, 0)], 0.0)
+        return left - right
+
+    def seen_stiffness(self, rows: np.ndarray) -> np.ndarray:
+        """1 / the compliance each row sees with the supports held
+        (:attr:`Layout.row_compliance`: statics along the chain; 0 on a floating bar)."""
+        compliance = self.layout.row_compliance[rows]
+        with np.errstate(divide="ignore"):
+            return np.where(np.isfinite(compliance), 1.0 / compliance, 0.0)
+
+    def pseudo_solve(self, rhs: np.ndarray) -> np.ndarray:
+        """K⁺ rhs: K⁻¹ rhs, or where bars float (:attr:`floating`) the least-norm solution of
+        K u = rhs less each floating bar's resultant spread evenly over its nodes (its part
+        that only contact can carry): solved on :attr:`held` (whose tie springs then carry
+        nothing) and each floating bar's mean displacement taken out."""
+        if not self.floating:
+            return self.solve_K(rhs)
+        groups = self._floating_groups
+        rhs = np.asarray(rhs, dtype=float)
+        balanced = rhs - np.bincount(groups, rhs, minlength=len(self.floating) + 1)[
+            groups] / self._floating_sizes[groups]
+        balanced[groups == len(self.floating)] = rhs[groups == len(self.floating)]
+        u = self.held.solve_K(balanced)
+        means = np.bincount(groups, u, minlength=len(self.floating) + 1) / self._floating_sizes
+        shift = means[groups]
+        shift[groups == len(self.floating)] = 0.0
+        return u - shift
+
+    @cached_property
+    def _floating_groups(self) -> np.ndarray:
+        """Per free node, the index of its floating bar among :attr:`floating` (their count
+        for a node of a supported bar)."""
+        groups = np.full(self.n_free, len(self.floating), dtype=np.intp)
+        bars = self.layout.bar_of(self.free)
+        for k, bar in enumerate(self.floating):
+            groups[bars == bar] = k
+        return groups
+
+    @cached_property
+    def _free_modes(self) -> np.ndarray:
+        """The modes K leaves free, columns: each floating bar's translation (1 on its nodes)."""
+        count = len(self.floating)
+        modes = np.zeros((self.n_free, count))
+        groups = self._floating_groups if count else np.zeros(0, dtype=np.intp)
+        rows = np.flatnonzero(groups < count)
+        modes[rows, groups[rows]] = 1.0
+        return modes
+
+    @cached_property
+    def _floating_sizes(self) -> np.ndarray:
+        sizes = np.bincount(self._floating_groups, minlength=len(self.floating) + 1)
+        return np.maximum(sizes, 1).astype(float)
+
+    def scale_terms(self) -> ScaleTerms:
+        """The scales' terms (:mod:`contactqp.model.base`), by statics on the chain."""
+        layout = self.layout
+        u0_free = self.pseudo_solve(balanced_by_contact(self.P, self._free_modes, self.C))
+        u0 = self.full_displacements(u0_free)
+        passed = np.maximum(penetration(layout, u0), 0.0)  # rows of ±1: a length as it is
+        contact = first_step_forces(passed, self.row_stiffness, self.C, self.pseudo_solve)
+        unbalanced = (np.abs(np.bincount(self._floating_groups, self.P)[: len(self.floating)])
+                      if self.floating else np.zeros(0))
+        reactions = self.reactions_of(u0, np.zeros(self.n_contacts))
+        return ScaleTerms(
+            loads=largest(layout.nodal_loads), reactions=largest(reactions),
+            contact=largest(contact), unbalanced=largest(unbalanced), free=largest(u0),
+            passed=largest(passed), widest=float(np.max(self.g, initial=0.0)),
+            size=float(layout.longest_bar), softest=float(self.band[0].min(initial=np.inf))
+            if self.band.size else 0.0)
 
     def full_displacements(self, u_free: np.ndarray) -> np.ndarray:
         """Displacements of every node, zero at the supports."""
@@ -203,31 +311,6 @@ class Model:
         # another length (a method's bad answer): the check says so, naming it
         supports = np.sort(self.layout.support_nodes)
         return np.insert(u_free, supports - np.arange(supports.size), 0.0)
-
-
-def displacement_scale(free_displacement: np.ndarray, g: np.ndarray, layout: Layout) -> float:
-    """U, from the loads and the prescribed gaps alone: the largest displacement the loads
-    cause with no contact, ‖K⁻¹P‖∞, or the deepest press fit (largest −gap), whichever is
-    larger. In a scene that nothing loads, the widest gap, or with none the longest bar."""
-    return float(displacement_scale_rule(largest(free_displacement),
-                                         float(np.max(-g, initial=0.0)), largest(g),
-                                         layout.longest_bar))
-
-
-def force_scale_rule(load: Any, press_fit: Any, softest: Any, U: Any) -> np.ndarray:
-    """F by its rule (:attr:`Model.force_scale`): the larger of the loads' force scale and the
-    largest press-fit force where that is > 0, else the softest element's stiffness × U.
-    Elementwise, so that a batch of cases (:mod:`contactqp.batch`) follows the same rule."""
-    scale = np.maximum(load, press_fit)
-    return np.where(scale > 0.0, scale, softest * U)
-
-
-def displacement_scale_rule(free: Any, press_depth: Any, widest: Any, longest: Any
-                            ) -> np.ndarray:
-    """U by its rule (:func:`displacement_scale`): the larger of ‖K⁻¹P‖∞ and the deepest press
-    fit where that is > 0, else the widest gap where > 0, else the longest bar. Elementwise."""
-    scale = np.maximum(free, press_depth)
-    return np.where(scale > 0.0, scale, np.where(widest > 0.0, widest, longest))
 
 
 def build_model(scene: Scene | Layout) -> Model:
@@ -354,5 +437,17 @@ def determinate_chain_solve(compliance: np.ndarray, support: int, rhs: np.ndarra
     return out[0] if rhs.ndim == 1 else out.T
 
 
-__all__ = ["Model", "build_model", "determinate_chain_solve", "displacement_scale",
-           "displacement_scale_rule", "force_scale_rule", "scene_model"]
+__all__ = ["Model", "build_model", "determinate_chain_solve", "scene_model", "support_reactions"]
+
+
+def support_reactions(layout: Layout, forces: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
+    """The force (+x) each support applies: what equilibrium of its node leaves over from
+    the elements on either side (``forces`` per link, 0 between bars), the loads and the
+    contacts there."""
+    nodes = layout.support_nodes
+    right = np.where(nodes < forces.size, forces[np.minimum(nodes, forces.size - 1)], 0.0)
+    left = np.where(nodes > 0, forces[np.maximum(nodes - 1, 0)], 0.0)
+    outside = layout.nodal_loads[nodes]
+    if layout.scene.contacts:  # a bar contact may end at a support; walls may not
+        outside = outside + contact_forces_on_nodes(layout, contact_force)[nodes]
+    return left - right - outside

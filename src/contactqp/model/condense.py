@@ -20,7 +20,7 @@ import scipy.sparse as sp
 from contactqp import linalg
 from contactqp.errors import SolverError
 from contactqp.layout import Layout, node_set, spread
-from contactqp.model.chain import Model, displacement_scale
+from contactqp.model.chain import Model
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,10 +82,10 @@ class Condensed:
         """w₀: the contact nodes' displacement under the loads with no contact."""
         return self.u0[self.nodes]
 
-    @cached_property
+    @property
     def displacement_scale(self) -> float:
-        """U of the condensed problem: its free displacement or its deepest press fit."""
-        return displacement_scale(self.free_displacement, self.g, self.layout)
+        """U: the full model's (the same problem, in fewer unknowns)."""
+        return self.full.displacement_scale
 
     def displacements(self, contact_force: np.ndarray) -> np.ndarray:
         """Free-node displacements of the full model under contact forces λ: u = K⁻¹P −

@@ -49,7 +49,7 @@ def problem_from_scene(scene: Scene | Layout) -> Problem:
                      shape=(rows.gap.size, n))
     return Problem(K, np.asarray(layout.nodal_loads, dtype=float), C, rows.gap,
                    prescribed=np.sort(layout.support_nodes), names=row_names(scene),
-                   units=scene.units, name=scene.name)
+                   units=f"{scene.unit.force}, {scene.unit.length}", name=scene.name)
 
 
 __all__ = ["problem_from_scene"]

@@ -34,7 +34,15 @@ import scipy.sparse as sp
 if TYPE_CHECKING:  # scipy.linalg and scipy.sparse.linalg load at the first solve (start-up)
     import scipy.sparse.linalg as spla
 
-from contactqp.errors import ProblemError, SolverError
+from contactqp.errors import OptionError, ProblemError, SolverError
+from contactqp.model import schur
+from contactqp.model.base import (
+    ContactModel,
+    ScaleTerms,
+    balanced_by_contact,
+    first_step_forces,
+    normalised_modes,
+)
 from contactqp.problem import Problem
 
 ORDERING = "MMD_AT_PLUS_A"  # SuperLU's fill-reducing ordering for symmetric K
@@ -86,7 +94,7 @@ class ColumnCache:
 
 
 @dataclass(frozen=True, eq=False)
-class SparseModel:
+class SparseModel(ContactModel):
     """The condensed problem and its factorisation (module docstring).
 
     Attributes
@@ -155,42 +163,117 @@ class SparseModel:
         W = _gram(Y, Y * cache.pivots[cache.support, None])
         return 0.5 * (W + W.T)
 
-    @cached_property
-    def free_displacement(self) -> np.ndarray:
-        """K⁻¹P: the free dofs' displacement with no contact force."""
-        return self.solve_K(self.P)
+    # --- the protocol (contactqp.model.base)
+    layout = None  # no chain: no bar quantities
 
-    @cached_property
-    def row_stiffness(self) -> np.ndarray:
-        """Per row, cᵀK c / (cᵀc)²: at least the stiffness 1 / cᵀK⁻¹c the row sees (Cauchy–
-        Schwarz), without a solve; a penetration times it is at least the force that
-        closes it, so the residuals that use it never understate."""
-        C = self.C
-        squared = np.asarray(C.multiply(C).sum(axis=1)).reshape(-1)
-        energy = np.asarray((C @ self.K).multiply(C).sum(axis=1)).reshape(-1)
-        return energy / squared**2
+    @property
+    def row_names(self) -> tuple[str, ...]:
+        return self.problem.names
 
-    @cached_property
-    def force_scale(self) -> float:
-        """F: the largest load, the largest force the prescribed motions bring, or (with
-        neither) the largest press fit times the stiffness its row sees."""
+    @property
+    def units(self) -> tuple[str, str]:
+        """(force, length) from the problem's label "force, length" ("" where not given)."""
+        parts = [p.strip() for p in self.problem.units.split(",")]
+        return (parts[0], parts[1]) if len(parts) == 2 else ("", "")
+
+    def set_solve(self, rows: np.ndarray, force: np.ndarray, gap: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        """The set solve by K's factorisation and the rows' Schur complement (or the
+        saddle-point system where K is singular): :mod:`contactqp.model.schur`."""
+        rows = np.asarray(rows, dtype=np.intp)
+        dlam, du = schur.correction(self, rows, np.asarray(force, dtype=float),
+                                    np.asarray(gap, dtype=float))
+        return du, dlam
+
+    def redundant(self, rows: np.ndarray) -> bool:
+        return schur.redundant(self, np.asarray(rows, dtype=np.intp))
+
+    def on_set(self, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return schur.on_set(self, active)
+
+    def seen_stiffness(self, rows: np.ndarray) -> np.ndarray:
+        """1 / W_ii of each of ``rows`` (W_ii from the rows' forward solves, kept,
+        :meth:`flexibility`; where K leaves modes free, 0 for a row that moves one and
+        c K⁺ cᵀ from :meth:`pseudo_solve` for the others)."""
+        rows = np.asarray(rows, dtype=np.intp)
+        if not rows.size:
+            return np.zeros(0)
+        if self.factor is not None:
+            compliance = np.diagonal(self.flexibility(rows)).copy()
+        else:
+            moves = np.abs(self.C[rows] @ self.floating).max(axis=1) > HELD * np.abs(
+                self.C[rows]).max(axis=1).toarray().reshape(-1)
+            compliance = np.full(rows.size, np.inf)
+            for k in np.flatnonzero(~moves):
+                c = self.C[[rows[k]]].toarray().reshape(-1)
+                compliance[k] = float(c @ self.pseudo_solve(c))
+        with np.errstate(divide="ignore"):
+            return np.where(np.isfinite(compliance) & (compliance > 0.0), 1.0 / compliance,
+                            np.where(compliance == 0.0, np.inf, 0.0))
+
+    def support_change(self, du: np.ndarray) -> np.ndarray:
+        """K_DI du: the prescribed dofs' forces of a move of the free ones."""
         problem = self.problem
-        moved = self.P - problem.f[self.free]
-        press = float(np.max(np.maximum(-self.g, 0.0) * self.row_stiffness, initial=0.0))
-        F = max(float(np.abs(problem.f).max(initial=0.0)), float(np.abs(moved).max(initial=0.0)),
-                press)
-        return F if F > 0.0 else 1.0
+        if not problem.prescribed.size:
+            return np.zeros(0)
+        return problem.K[problem.prescribed][:, self.free] @ du
+
+    @property
+    def singular(self) -> bool:
+        """Whether K leaves modes free (held by contact rows alone)."""
+        return self.factor is None
+
+    def reactions_of(self, u: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
+        """Each prescribed dof's force, (K u − f) there (no contact row acts on one)."""
+        return self.reactions(u)
 
     @cached_property
-    def displacement_scale(self) -> float:
-        """U: the largest displacement the loads and prescribed motions cause with no contact
-        (K⁻¹f), the largest prescribed motion, or the deepest press fit (open gaps are not a
-        scale: a far row would make every penetration look small)."""
-        free = (np.abs(self.free_displacement).max(initial=0.0) if self.factor is not None
-                else 0.0)
-        U = max(float(free), float(np.abs(self.problem.prescribed_values).max(initial=0.0)),
-                float(np.max(np.maximum(-self.g, 0.0), initial=0.0)))
-        return U if U > 0.0 else float(np.abs(self.g).max(initial=1.0)) or 1.0
+    def modes(self) -> np.ndarray:
+        """The free modes (:attr:`floating`) in reduced row-echelon form, each scaled to a
+        largest entry of 1 (:func:`contactqp.model.base.normalised_modes`); none where K is
+        definite."""
+        if self.floating is None:
+            return np.zeros((self.n_free, 0))
+        return normalised_modes(self.floating)
+
+    def pseudo_solve(self, rhs: np.ndarray) -> np.ndarray:
+        """K⁺ rhs: K⁻¹ rhs, or where K leaves modes X free (orthonormal) the least-norm
+        solution of K u = rhs − X Xᵀ rhs (the part only contact can carry taken out), from
+        the saddle-point system [[K, X], [Xᵀ, 0]] (X's few dense columns)."""
+        if self.factor is not None:
+            return self.solve_K(rhs)
+        X = self.floating
+        if "_pseudo" not in self.__dict__:
+            import scipy.sparse.linalg as spla
+
+            saddle = sp.bmat([[self.K, sp.csc_matrix(X)], [sp.csc_matrix(X.T), None]],
+                             format="csc")
+            self.__dict__["_pseudo"] = spla.splu(saddle)
+        rhs = np.asarray(rhs, dtype=float)
+        return self.__dict__["_pseudo"].solve(np.concatenate((rhs, np.zeros(X.shape[1]))))[
+            : self.n_free]
+
+    def scale_terms(self) -> ScaleTerms:
+        """The scales' terms (:mod:`contactqp.model.base`)."""
+        problem = self.problem
+        u0_free = self.pseudo_solve(balanced_by_contact(self.P, self.modes, self.C))
+        u0 = self.full_displacements(u0_free)
+        C = self.C
+        size = np.abs(C).max(axis=1).toarray().reshape(-1) if C.shape[0] else np.zeros(0)
+        pen = C @ u0_free - self.g
+        passed = np.where(self.equality, np.abs(pen), np.maximum(pen, 0.0))
+        contact = first_step_forces(passed, self.row_stiffness, C, self.pseudo_solve)
+        coordinates = problem.coordinates
+        extent = (float(np.max(np.ptp(coordinates, axis=0), initial=0.0))
+                  if coordinates is not None and coordinates.size else 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lengths, gaps = passed / size, np.maximum(self.g, 0.0) / size
+        return ScaleTerms(
+            loads=_largest(problem.f), reactions=_largest(self.reactions(u0)),
+            contact=_largest(contact), unbalanced=_largest(self.modes.T @ self.P),
+            free=_largest(u0), passed=_largest(lengths), widest=_largest(gaps),
+            size=extent or 1.0,
+            softest=float(self.K.diagonal().min(initial=np.inf)) if self.n_free else 0.0)
 
     def full_displacements(self, u_free: np.ndarray) -> np.ndarray:
         """Every dof's displacement: u_free on the free dofs, the prescribed values on the
@@ -209,6 +292,10 @@ class SparseModel:
             return np.zeros(0)
         K_D = problem.K[problem.prescribed]
         return K_D @ u - problem.f[problem.prescribed]
+
+
+def _largest(values: np.ndarray) -> float:
+    return float(np.abs(values).max(initial=0.0))
 
 
 def _gram(Y: np.ndarray, Z: np.ndarray) -> np.ndarray:
@@ -281,6 +368,31 @@ def diagonal_pivots(U: sp.csc_matrix) -> np.ndarray:
     pivots = np.zeros(U.shape[0])
     pivots[columns[on]] = U.data[on]  # one diagonal entry per column
     return pivots
+
+
+def problem_model(problem: Problem) -> SparseModel:
+    """The model of ``problem``, built once and kept with it: a Problem owns read-only
+    arrays and does not change, so every later solve, check or study of the same problem
+    object reuses the model and what it has worked out (K's factorisation, K⁻¹P, the scales,
+    the columns of W), as :func:`contactqp.model.chain.scene_model` does for a scene."""
+    model = problem.__dict__.get(_KEPT_MODEL)
+    if model is None:
+        model = problem.__dict__[_KEPT_MODEL] = build_sparse_model(problem)
+    return model
+
+
+_KEPT_MODEL = "_sparse_model"  # where problem_model keeps a problem's model
+
+
+def as_sparse_model(value: Any) -> SparseModel:
+    """``value`` if it is a SparseModel, the kept model of a Problem; an OptionError for
+    anything else."""
+    if isinstance(value, SparseModel):
+        return value
+    if isinstance(value, Problem):
+        return problem_model(value)
+    raise OptionError(f"the model must be a contactqp.Scene, a contactqp.Problem or a model "
+                      f"of one, got {type(value).__name__}")
 
 
 def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseModel:

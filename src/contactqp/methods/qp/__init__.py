@@ -32,11 +32,11 @@ from typing import Any
 import numpy as np
 
 from contactqp.errors import ContactqpError, OptionError, SolverNotAvailable
+from contactqp.methods.base import Solution
 from contactqp.methods.qp.outcome import QPOutcome, failed_outcome
 from contactqp.methods.qp.problem import QPProblem, qp_from_model, qp_problem, scales
 from contactqp.methods.qp.settings import ACCURACIES, accuracy_settings
 from contactqp.model import Condensed, Model
-from contactqp.result import Solution
 
 PIP_SOLVERS = 'pip install "contactqp[solvers]"'
 

@@ -28,7 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from contactqp.errors import OptionError
-from contactqp.model import Condensed, Model, build_model, elongation_rows
+from contactqp.model import Condensed, ContactModel, Model, build_model, elongation_rows
 from contactqp.scene import Scene
 from contactqp.values import flag
 
@@ -147,11 +147,14 @@ def scales(model: Model | Condensed) -> tuple[float, float]:
     return U, k * U
 
 
-def qp_from_model(model: Model | Condensed, contact: str = "inequality", scale: bool = True,
+def qp_from_model(model: ContactModel, contact: str = "inequality", scale: bool = True,
                   formulation: str = "full") -> QPProblem:
     """The QP data of a model (see :class:`QPProblem`), scaled by :func:`scales` or in SI;
     ``formulation`` "full" (x = u, Hessian K) or "strain" (x = [u; e], Hessian diag(0, k_e),
-    tie rows B u − e = 0)."""
+    tie rows B u − e = 0). A model with no chain (a user's problem) is scaled by its own F
+    and U (:func:`_general_qp`)."""
+    if model.layout is None:
+        return _general_qp(model, contact, scale)
     U, F = scales(model) if scale else (1.0, 1.0)
     if formulation == "strain":
         return _strain_qp(model, contact, U, F)
@@ -163,6 +166,21 @@ def qp_from_model(model: Model | Condensed, contact: str = "inequality", scale: 
         K=K, q=-model.P / F, C=sp.csc_array(model.C), g=model.g / U, contact=contact,
         displacement_scale=U, force_scale=F,
     )
+
+
+def _general_qp(model: ContactModel, contact: str, scale: bool = True) -> QPProblem:
+    """The QP of a model with no chain, scaled by its F and U (x = u / U, multipliers λ / F)
+    as a scene's QP is; mixed inequality and equality rows are refused (the backends take one
+    kind of row)."""
+    equality = model.equality
+    if equality.any() and not equality.all() and contact != "equality":
+        raise OptionError("qp: the QP backends take rows of one kind, and this problem mixes "
+                          "inequality and equality rows (use lagrange, penalty or augmented)")
+    kind = "equality" if contact == "equality" or equality.all() else "inequality"
+    U, F = (model.displacement_scale, model.force_scale) if scale else (1.0, 1.0)
+    return QPProblem(K=sp.csc_array(model.K / (F / U)), q=-model.P / F,
+                     C=sp.csc_array(model.C), g=model.g / U, contact=kind,
+                     displacement_scale=U, force_scale=F)
 
 
 def _strain_qp(model: Model, contact: str, U: float, F: float) -> QPProblem:

@@ -13,8 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from contactqp.check.chain.bar_contacts import contact_give, pushing_pairs, through_pairs
+from contactqp.check.chain.self_stress import opposed_forces, rerouted_forces
+from contactqp.check.chain.spans import Running, count_at_or_before, kept, propagate
 from contactqp.held import wedged_bars, wedged_rows
-from contactqp.loops import opposed_forces, rerouted_forces
 from contactqp.model import (
     Layout,
     bar_groups,
@@ -24,8 +26,6 @@ from contactqp.model import (
     penetration,
     seen_stiffness,
 )
-from contactqp.pairs import contact_give, pushing_pairs, through_pairs
-from contactqp.runs import Running, count_at_or_before, kept, propagate
 
 ROUND_OFF = 4.0 * np.finfo(float).eps  # a few units in the last place of what is stored
 
@@ -97,7 +97,7 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
                                             np.where(pushing, np.inf, standing), held, s,
                                             pushing)
     # ... and a contact past its gap with no force may take the force of a row that holds
-    # its end, round the loop of rows (contactqp.loops.rerouted_forces)
+    # its end, round the loop of rows (contactqp.check.chain.self_stress.rerouted_forces)
     rerouted = 0.0 if equality else rerouted_forces(layout, lam, pen, pushing, u, U)
     force_bound = max(force_error, largest(moved)) + gap_force + pair + closing + rerouted
     # a pushing bar contact is held at both ends above, but the two ends move together: the
@@ -340,7 +340,7 @@ def row_stiffness(layout: Layout, held: np.ndarray, pushing: np.ndarray,
     that contact's 6178 N carried by the stiff element instead, 2e-3 of F off.) With
     ``ends``, also the stiffness of each end (per nonzero of :attr:`Scene.contact_rows`)."""
     walls_only = len(layout.scene.walls) == layout.rows.gap.size
-    # kept per held set (contactqp.runs); with bar contacts the pushing rows decide too
+    # kept per held set (contactqp.check.chain.spans); with bar contacts the pushing rows decide too
     kind = "stiffness" if walls_only else ("stiffness", np.packbits(pushing).tobytes())
     row, node_stiffness = kept(layout, kind, held,
                                lambda: _row_stiffness(layout, held, pushing, walls_only))

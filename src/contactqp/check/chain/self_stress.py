@@ -1,7 +1,7 @@
 """Contact forces that move nothing: forces that push a node from both sides at once, and
 forces carried round a loop of rows (walls and bar contacts) that the exact answer leaves
 open; and the force that a contact left past its gap with none may take round such a loop
-(:func:`rerouted_forces`). No displacement shows them, so the check (:mod:`contactqp.bounds`)
+(:func:`rerouted_forces`). No displacement shows them, so the check (:mod:`contactqp.check.chain.certificate`)
 counts them apart: each is wrong in every row it is on."""
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ def rerouted_forces(layout: Layout, lam: np.ndarray, pen: np.ndarray, pushing: n
     hold their ends (N). Closing such a contact moves its ends; where an end is held by a
     pushing row that the move opens (its entry at the node has the same sign as the
     contact's), the exact answer may release that row and send its force round the loop
-    through the contact, with hardly any move (the gap moves, :func:`contactqp.bounds.gap_moves`,
+    through the contact, with hardly any move (the gap moves, :func:`contactqp.check.chain.certificate.gap_moves`,
     keep every held node held and see only the elastic part). At each end the force the
     contact takes comes off such rows (the node's equilibrium, elements apart), so it is at
     most what they carry there: the least over the contact's ends (a wall's other end, the

@@ -1,4 +1,4 @@
-"""What the check (contactqp.bounds) works out along the chain: the runs of elements between
+"""What the check (contactqp.check.chain.certificate) works out along the chain: the runs of elements between
 held nodes (:class:`Runs`), the stiffness each contact row sees with those nodes held, the
 running sum of the outside forces (:class:`Running`), and what an answer's imbalance does
 run by run with the held nodes fixed (:func:`propagate`).

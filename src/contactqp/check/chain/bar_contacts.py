@@ -1,4 +1,4 @@
-"""What pushing bar contacts do to an answer's error (:mod:`contactqp.bounds`): a pushing bar
+"""What pushing bar contacts do to an answer's error (:mod:`contactqp.check.chain.certificate`): a pushing bar
 contact holds its two ends a fixed distance apart, not in place, so they move together. A
 force error at either end moves the pair by the sum of both over the stiffness the two bars
 give it there (:func:`contact_give`), and that sum passes on through the runs into the held

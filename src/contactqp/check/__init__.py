@@ -1,0 +1,151 @@
+"""The independent check of an answer: one entry (:func:`check`), one definition of the
+residuals and of ``verified`` (:mod:`contactqp.check.residuals`), for every model alike. It
+reads the model (its protocol, :mod:`contactqp.model.base`) and the answer, never a method.
+
+The error bounds come from a certificate:
+
+- every model: the exact answer on the answer's own contact set, solved with the model's set
+  solve and measured (:mod:`contactqp.check.on_set`);
+- a chain (a bar scene's model) first: its own certificate in O(n), the answer read as the
+  exact answer of a nearby scene run by run (:mod:`contactqp.check.chain`). Where that does
+  not verify an answer whose residuals pass, the general certificate is worked out too and
+  the smaller of the two bounds kept: both bound the error, so the smaller does. A chain's
+  verdict is therefore never looser than the general one, and is the same wherever its own
+  certificate verifies what the general one verifies (tests/test_front_ends.py holds them
+  equal on random scenes and every method).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from contactqp.check.chain import chain_bounds, sized
+from contactqp.check.on_set import on_set_bounds
+from contactqp.check.residuals import (
+    GUARANTEE,
+    TOLERANCES,
+    Check,
+    Tolerances,
+    natural_residual,
+    not_finite,
+    residuals,
+    verdict,
+)
+from contactqp.errors import OptionError
+from contactqp.model.base import ContactModel, natural_map
+from contactqp.model.chain import Model
+from contactqp.model.sparse import as_sparse_model
+from contactqp.scene import Scene
+
+ChainBounds = Callable[[], tuple[float, float]]
+
+
+def check_model(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, contact: str,
+                tolerances: Tolerances = TOLERANCES, *, chain: ChainBounds | None = None,
+                natural: bool = True) -> Check:
+    """Check an answer (free-dof displacements, one force per row) against a model (module
+    docstring); ``contact="equality"`` holds every row on its gap. ``chain``: the chain's
+    own certificate, a function giving its (force, displacement) bounds. ``natural``: work out
+    the natural-map residual (a batch reads it case by case)."""
+    equality = model.equality | (contact == "equality")
+    u_free = np.asarray(u_free, dtype=float).reshape(-1)
+    lam = np.asarray(lam, dtype=float).reshape(-1)
+    if not (np.isfinite(u_free).all() and np.isfinite(lam).all()):
+        return not_finite(model, equality, lam)
+    found, pen = residuals(model, u_free, lam, equality)
+    found["natural_map"] = (natural_residual(model, lam, pen, equality) if natural
+                            else None if equality.any() or model.singular else np.nan)
+    passing = all(value is None or value <= getattr(tolerances, name)
+                  for name, value in found.items() if name != "natural_map")
+    force = displacement = np.inf
+    why = ""
+    if chain is not None:
+        force, displacement = chain()
+        within = (force <= tolerances.force * model.force_scale
+                  and displacement <= tolerances.displacement * model.displacement_scale)
+        if within or not passing:  # the general certificate cannot change this verdict
+            return verdict(model, found, lam, equality, force, displacement, tolerances,
+                           penetration=pen)
+    general = on_set_bounds(model, u_free, lam, pen, equality)
+    force, displacement = min(force, general[0]), min(displacement, general[1])
+    if not np.isfinite(force):
+        why = general[2]
+    return verdict(model, found, lam, equality, force, displacement, tolerances, why,
+                   penetration=pen)
+
+
+def check(model: Any, u: Any, contact_force: Any, reactions: Any = None,
+          contact: str = "inequality", tolerances: Tolerances = TOLERANCES) -> Check:
+    """Check an answer, however it was found, against a scene or a user's problem: the one
+    check every Result carries (module docstring).
+
+    Parameters
+    ----------
+    model : Scene, Problem, or a model of either
+        What the answer is checked against.
+    u : array_like
+        The displacement of every node (a scene) or dof (a problem).
+    contact_force : array_like
+        One force per contact row, positive when the row pushes.
+    reactions : array_like, optional
+        The force of every support (a scene) or prescribed dof (a problem); where given, what
+        it differs from the reactions u implies counts as out of balance (equilibrium).
+    contact : str
+        ``"inequality"`` or ``"equality"`` (every row held on its gap).
+    tolerances : Tolerances
+        The residuals' tolerances (default :data:`TOLERANCES`).
+
+    Returns
+    -------
+    Check
+        ``verified``, ``physical``, the residuals, the error bounds and the message.
+
+    Raises
+    ------
+    OptionError
+        A bad contact kind, or an array of the wrong length for the model.
+    SceneError
+        A scene (or, as its subclass ProblemError, a problem) that is not valid.
+    """
+    if contact not in ("inequality", "equality"):
+        raise OptionError(f"contact must be inequality or equality; got {contact!r}")
+    if isinstance(model, (Scene, Model)):
+        model, u, lam, reactions = sized(model, u, contact_force, reactions)
+        if not np.isfinite(reactions).all():
+            return not_finite(model, model.equality | (contact == "equality"), lam)
+        found = check_model(
+            model, u[model.free], lam, contact, tolerances,
+            chain=lambda: chain_bounds(model, u, lam, reactions, contact, tolerances))
+        return found
+    model = as_sparse_model(model)
+    u = _sized("u", u, model.problem.n)
+    lam = _sized("contact_force", contact_force, model.n_contacts)
+    found = check_model(model, u[model.free], lam, contact, tolerances)
+    # what the answer holds at the prescribed dofs, and the reactions it says they give
+    moved = float(np.abs(u[model.problem.prescribed] - model.problem.prescribed_values).max(
+        initial=0.0))
+    off = 0.0
+    if reactions is not None:
+        given = _sized("reactions", reactions, model.problem.prescribed.size)
+        off = float(np.abs(given - model.reactions_of(u, lam)).max(initial=0.0))
+    if moved == 0.0 and off == 0.0 or not np.isfinite(found.force_error_bound):
+        return found
+    residual = {k: v for k, v in found.residuals.items() if k not in ("force", "displacement")}
+    residual["equilibrium"] = max(residual["equilibrium"] or 0.0, off / model.force_scale)
+    return verdict(model, residual, lam, model.equality | (contact == "equality"),
+                   found.force_error_bound + off, found.displacement_error_bound + moved,
+                   tolerances, penetration=found.penetration)
+
+
+def _sized(name: str, values: Any, size: int) -> np.ndarray:
+    array = np.asarray(values, dtype=float).reshape(-1)
+    if array.size != size:
+        raise OptionError(f"{name} must have {size} values for this model, got {array.size}")
+    return array
+
+
+__all__ = ["GUARANTEE", "TOLERANCES", "Check", "Tolerances", "check", "check_model",
+           "natural_map"]

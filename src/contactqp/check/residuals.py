@@ -1,0 +1,204 @@
+"""What ``verified`` means, on every front end alike: the tolerances, the residuals of an
+answer (one definition, read off the model's protocol, :mod:`contactqp.model.base`), and the
+verdict that the residuals and a certificate's error bounds give together.
+
+Residuals (dimensionless; F and U the model's scales, s_i = 1/(c_i K⁻¹ c_iᵀ) the stiffness row i
+sees with the supports held (0 where it moves a mode K leaves free; worked out only for the
+rows whose residual the cheaper bound c_iᵀK c_i/(c_iᵀc_i)² puts above 1e-9 of F), p_i = C_i u −
+g_i the penetration):
+
+    equilibrium      max over the free dofs of |K u − P + Cᵀλ| / F: what the answer's forces
+                     leave out of balance
+    feasibility      max p_i⁺ · s_i / F: the force it takes to push a row back (an equality
+                     row: |p_i| · s_i)
+    complementarity  max min(λ_i⁺, (−p_i)⁺ · s_i) / F over inequality rows: a row may push or
+                     stand open, not both
+    sign             max λ_i⁻ / F over inequality rows: how hard a row pulls
+    force            the force error bound / F: every contact force and reaction within it
+    displacement     the displacement error bound / U: every displacement within it
+    natural_map      Siconos's measure on the LCP, each row scaled by c_iᵀK c_i/(c_iᵀc_i)²
+                     (reported, not part of verified; None where K leaves a mode free or
+                     rows are equalities)
+
+The bounds come from a certificate (:mod:`contactqp.check.on_set` for every model, and on a
+chain first its own O(n) one, :mod:`contactqp.check.chain`). Verified: every residual within
+:data:`TOLERANCES`, so every contact force and reaction is within 1e-5·F and every
+displacement within 1e-5·U of the exact answer (:data:`GUARANTEE`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from contactqp.model.base import ContactModel, natural_map
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Largest residuals a verified Result may have (dimensionless, see the module docstring).
+
+    The explicit Lagrange method reaches ~1e-15. Equilibrium and sign are held to 1e-6 of F;
+    feasibility, complementarity and displacement to 1e-5 (of F, F and U).
+
+    Parameters
+    ----------
+    equilibrium : float
+        Of the section equilibrium residual, relative to F (default 1e-6).
+    feasibility : float
+        Of the penetration as a force, relative to F (default 1e-5).
+    complementarity : float
+        Relative to F (default 1e-5).
+    sign : float
+        Of a pulling contact force, relative to F (default 1e-6).
+    force : float
+        Of the force error bound, relative to F (default 1e-5).
+    displacement : float
+        Of the displacement error bound, relative to U (default 1e-5).
+    """
+
+    equilibrium: float = 1e-6
+    feasibility: float = 1e-5
+    complementarity: float = 1e-5
+    sign: float = 1e-6
+    force: float = 1e-5
+    displacement: float = 1e-5
+
+
+TOLERANCES = Tolerances()
+
+# What ``verified`` guarantees, relative to F and U (module docstring)
+GUARANTEE = (TOLERANCES.force, TOLERANCES.displacement)
+
+
+@dataclass(frozen=True)
+class Check:
+    """The independent check of a Result: the residuals (module docstring), whether all are
+    within tolerance, whether no wall pulls, what failed, and the error bounds they give."""
+
+    residuals: dict[str, float | None]
+    verified: bool
+    physical: bool
+    message: str
+    force_error_bound: float  # N: every contact force and reaction within this of exact
+    displacement_error_bound: float  # m: every displacement within this of exact
+    force_scale: float  # F (N)
+    displacement_scale: float  # U (m)
+    # C u − g per row (m) as the residuals read it, for the caller that reports it too (None
+    # for an answer with a NaN or an infinite value)
+    penetration: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+
+ORDER = ("equilibrium", "feasibility", "complementarity", "sign", "force", "displacement",
+         "natural_map")
+
+
+def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality: np.ndarray
+              ) -> tuple[dict[str, float | None], np.ndarray]:
+    """(the residuals of the module docstring but force and displacement, the penetration)
+    of an answer (free-dof displacements, one force per row); ``equality`` per row."""
+    F = model.force_scale
+    pen = model.C @ u_free - model.g
+    unilateral = ~equality
+    balance = model.imbalance(u_free, lam)
+    past = np.where(equality, np.abs(pen), np.maximum(pen, 0.0))
+    standing = np.where(unilateral, np.maximum(-pen, 0.0), 0.0)
+    s = _stiffness(model, past, standing, lam, F)
+    passed = past * s
+    both = np.minimum(np.maximum(lam, 0.0), standing * s)
+    found: dict[str, float | None] = {
+        "equilibrium": float(np.abs(balance).max(initial=0.0)) / F,
+        "feasibility": float(np.nan_to_num(passed, nan=0.0).max(initial=0.0)) / F,
+        "complementarity": float(np.nan_to_num(both[unilateral], nan=0.0).max(initial=0.0)) / F,
+        "sign": float(np.maximum(-lam[unilateral], 0.0).max(initial=0.0)) / F}
+    if equality.all():
+        found["complementarity"] = found["sign"] = None
+    return found, pen
+
+
+SIGNIFICANT = 1e-9  # of F: a row whose residual s̄ puts below this needs no solve for its s
+
+
+def _stiffness(model: ContactModel, past: np.ndarray, standing: np.ndarray, lam: np.ndarray,
+               F: float) -> np.ndarray:
+    """Per row, the stiffness it sees, 1/W_ii (:meth:`~contactqp.model.base.ContactModel.
+    seen_stiffness`), where the residuals read it above SIGNIFICANT of F with the bound s̄
+    (which is never smaller); s̄ elsewhere, where it makes no residual that counts."""
+    bound = model.row_stiffness
+    reach = np.maximum(past * bound, np.minimum(np.maximum(lam, 0.0), standing * bound))
+    rows = np.flatnonzero(~(reach <= SIGNIFICANT * F))  # NaN rows too: the solve says what
+    if not rows.size:
+        return bound
+    s = np.array(bound, dtype=float)
+    s[rows] = model.seen_stiffness(rows)
+    return s
+
+
+def natural_residual(model: ContactModel, lam: np.ndarray, pen: np.ndarray,
+                     equality: np.ndarray) -> float | None:
+    """:func:`~contactqp.model.base.natural_map` of an answer, each row scaled by its s (None
+    where rows are equalities or K leaves a mode free: the LCP needs K⁻¹)."""
+    if equality.any() or model.singular:
+        return None
+    free_gaps = model.g - model.C @ model.free_displacement
+    with np.errstate(divide="ignore"):
+        roots = 1.0 / np.sqrt(model.row_stiffness)
+    return float(natural_map(lam, -pen, free_gaps, roots))
+
+
+def verdict(model: ContactModel, found: dict[str, float | None], lam: np.ndarray,
+            equality: np.ndarray, force_bound: float, displacement_bound: float,
+            tolerances: Tolerances, why: str = "",
+            penetration: np.ndarray | None = None) -> Check:
+    """The Check of residuals ``found`` (force and displacement from the bounds): verified
+    where every one is within ``tolerances`` (``why``: a certificate that found no bound)."""
+    F, U = model.force_scale, model.displacement_scale
+    found = {**found, "force": force_bound / F, "displacement": displacement_bound / U}
+    failures = [f"{name} residual {value:.2e} > {getattr(tolerances, name):.3g}"
+                for name, value in found.items()
+                if name != "natural_map" and value is not None
+                and not value <= getattr(tolerances, name)]
+    if why:
+        failures.append(why)
+    # a row that is unilateral by its kind may only push, even where the contact asked for
+    # holds it on its gap (the textbook equality form): a pull there is not physical
+    unilateral = ~model.equality
+    pulling = float(np.maximum(-lam[unilateral], 0.0).max(initial=0.0)) / F
+    physical = pulling <= tolerances.sign
+    notes = list(failures)
+    if not physical:
+        rows = np.flatnonzero(unilateral & (lam < -tolerances.sign * F))
+        rows = rows[np.argsort(lam[rows], kind="stable")]
+        more = rows.size - LISTED_PULLS
+        force = f" {model.units[0]}" if model.units[0] else ""
+        notes.append("non-physical: a contact pulls (" + ", ".join(
+            f"{model.row_names[i]} {lam[i]:.6g}{force}" for i in rows[:LISTED_PULLS])
+            + (f" and {more} more" if more > 0 else "") + "); a rigid wall can only push")
+    ordered = {name: found.get(name) for name in ORDER}
+    return Check(ordered, not failures, physical, "; ".join(notes), force_bound,
+                 displacement_bound, F, U, penetration)
+
+
+LISTED_PULLS = 5  # a message names the rows that pull hardest, not every one (10⁴ made 224 kB)
+
+
+def not_finite(model: ContactModel, equality: np.ndarray, lam: np.ndarray) -> Check:
+    """The Check of an answer with a NaN or an infinite value: every residual inf."""
+    F, U = model.force_scale, model.displacement_scale
+    names = ["equilibrium", "feasibility", "complementarity", "sign", "force", "displacement"]
+    skip = {"complementarity", "sign"} if equality.all() else set()
+    found: dict[str, float | None] = {name: (None if name in skip else math.inf)
+                                      for name in names}
+    found["natural_map"] = None
+    physical = bool(np.isfinite(lam).all()) and float(
+        np.max(-lam[~model.equality], initial=0.0)) <= TOLERANCES.sign * F
+    message = "the answer is not finite (the method returned no answer)"
+    if not physical:
+        message += "; non-physical: contact forces are not finite"
+    return Check(found, False, physical, message, math.inf, math.inf, F, U)
+
+
+__all__ = ["GUARANTEE", "TOLERANCES", "Check", "Tolerances", "natural_residual", "not_finite",
+           "residuals", "verdict"]
