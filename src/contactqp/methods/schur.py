@@ -24,10 +24,13 @@ rows, 80 in contact): 5 sets, 88 rows solved for.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
-from contactqp.methods._active_set import DECISION_RTOL, active_set_loop
+from contactqp.methods._active_set import DECISION_RTOL, ActiveSetCycle, active_set_loop
 from contactqp.methods.base import Solution
+from contactqp.methods.complementarity import LEMKE_ROWS, solve_lemke
 from contactqp.model.schur import correction, on_set
 from contactqp.model.sparse import SparseModel
 
@@ -64,17 +67,69 @@ def solve_schur(model: SparseModel, contact: str = "inequality", *,
     if equality.all():
         u, lam = on_set(model, equality)
         return Solution(u, lam, solver="lagrange", info=_info(model))
-    if model.factor is None:  # K singular: from every row held, so that the mode is held
-        start = np.ones(model.n_contacts, dtype=bool)
+    pin = None
+    if model.factor is None:  # K singular: each set holds what K leaves free (pinning)
+        pin = pinning(model)
+        start = equality
     elif (start := equality | (model.C @ model.free_displacement - model.g > 0.0)
           ).sum() > ENTER_MIN:  # the deepest first, as every later step
         start = entering(model, equality, model.free_displacement, np.zeros(model.n_contacts))
-    u, lam, iterations = active_set_loop(
-        model.n_contacts, lambda active: on_set(model, active),
-        lambda active, u, lam: entering(model, active, u, lam) | equality,
-        method="lagrange", max_iterations=max_iterations, start=start)
-    u, lam = refined(model, u, lam, np.flatnonzero((lam != 0.0) | equality))
+    try:
+        u, lam, iterations = active_set_loop(
+            model.n_contacts, lambda active: on_set(model, active),
+            lambda active, u, lam: entering(model, active, u, lam) | equality,
+            method="lagrange", max_iterations=max_iterations, start=start, pin=pin)
+    except ActiveSetCycle as cycle:  # dependent rows can make the loop come back
+        if model.factor is None or model.n_contacts > LEMKE_ROWS or equality.any():
+            raise
+        solution = solve_lemke(model, contact)  # finite, and it cannot cycle
+        return Solution(solution.u_free, solution.contact_force, solver="lagrange",
+                        iterations=solution.iterations,
+                        info={**_info(model), "active_set": f"passed, then Lemke's method "
+                                                            f"({cycle})"})
+    held = (lam != 0.0) | equality
+    u, lam = refined(model, u, lam, np.flatnonzero(held if pin is None else pin(held)))
     return Solution(u, lam, solver="lagrange", iterations=iterations, info=_info(model))
+
+
+HELD_RANK = 1e-10  # singular values of C_A X below this × the largest: a mode the set leaves free
+
+
+def pinning(model: SparseModel) -> Callable[[np.ndarray], np.ndarray]:
+    """For a K that leaves modes X free (:attr:`~contactqp.model.sparse.SparseModel.floating`,
+    held by contact rows alone): a function that adds to a set the rows that stop each mode
+    the set leaves free, in the direction the loads push it (both ways where they push it
+    neither), the nearest first (the smallest gap per unit of motion), so that every set
+    solved holds the body. A chain does the same bar by bar (:func:`contactqp.methods.
+    _active_set.pinning`)."""
+    modes = model.floating
+    moves = model.C @ modes  # rows x modes: how each row closes as each mode moves
+    push = modes.T @ model.P
+
+    def pin(active: np.ndarray) -> np.ndarray:
+        active = np.array(active, dtype=bool)
+        for _ in range(2 * modes.shape[1] + 1):
+            held = moves[active]
+            _, sigma, vt = np.linalg.svd(held, full_matrices=True) if held.size else (
+                None, np.zeros(0), np.eye(modes.shape[1]))
+            rank = int(np.sum(sigma > HELD_RANK * max(float(np.abs(moves).max(initial=0.0)),
+                                                       1e-300)))
+            if rank == modes.shape[1]:
+                return active
+            free = vt[rank]
+            ways = [np.sign(free @ push)] if free @ push != 0.0 else [1.0, -1.0]
+            added = False
+            for way in ways:
+                closing = moves @ (way * free)
+                candidates = np.flatnonzero(~active & (closing > HELD_RANK * np.abs(
+                    closing).max(initial=0.0)))
+                if candidates.size:
+                    nearest = candidates[np.argmin(model.g[candidates] / closing[candidates])]
+                    active[nearest] = added = True
+            if not added:
+                return active  # nothing stops it: the set solve says so
+        return active
+    return pin
 
 
 def refined(model: SparseModel, u: np.ndarray, lam: np.ndarray, rows: np.ndarray

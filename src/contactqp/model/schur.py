@@ -20,9 +20,9 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from contactqp.errors import SolverError
+from contactqp.model import saddle
 
 SparseModel = Any  # the model these functions read (contactqp.model.sparse.SparseModel)
 
@@ -95,19 +95,16 @@ def on_set(model: SparseModel, active: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 def saddle_solve(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray]:
-    """(u, λ_rows) with K u + C_Aᵀλ = force and C_A u = gap, by one sparse LU of
-    [[K, C_Aᵀ], [C_A, 0]]: for a K that only contact rows hold (no factorisation of K alone
-    exists). A SolverError where the rows do not hold what K leaves free."""
-    import scipy.sparse.linalg as spla  # at the first solve, not at start-up
-
-    C_A = model.C[rows]
-    matrix = sp.csc_matrix(sp.bmat([[model.K, C_A.T], [C_A, None]]))
+    """(u, λ_rows) with K u + C_Aᵀλ = force and C_A u = gap, by the sparse saddle-point system
+    (:func:`contactqp.model.saddle.set_solve`; rows that repeat a constraint regularised): for
+    a K that only contact rows hold (no factorisation of K alone exists). A SolverError where
+    the rows do not hold what it leaves free."""
     try:
-        x = spla.splu(matrix).solve(np.concatenate((force, gap)))
-    except RuntimeError:
+        u, lam, _ = saddle.set_solve(model.K, model.C[rows], force, gap)
+    except SolverError:
         raise SolverError(f"K is singular and the {rows.size} rows held do not hold what it "
                           "leaves free") from None
-    return x[: model.n_free], x[model.n_free:]
+    return u, lam
 
 
 def correction(model: SparseModel, rows: np.ndarray, residual: np.ndarray,

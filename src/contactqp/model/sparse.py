@@ -181,14 +181,20 @@ class SparseModel(ContactModel):
         """The set solve by K's factorisation and the rows' Schur complement (or the
         saddle-point system where K is singular): :mod:`contactqp.model.schur`."""
         rows = np.asarray(rows, dtype=np.intp)
+        if self.factor is None:  # no K⁻¹: the saddle-point system (rows that repeat a
+            return super().set_solve(rows, force, gap)  # constraint regularised)
         dlam, du = schur.correction(self, rows, np.asarray(force, dtype=float),
                                     np.asarray(gap, dtype=float))
         return du, dlam
 
     def redundant(self, rows: np.ndarray) -> bool:
+        if self.factor is None:
+            return super().redundant(rows)
         return schur.redundant(self, np.asarray(rows, dtype=np.intp))
 
     def on_set(self, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if self.factor is None:
+            return super().on_set(active)
         return schur.on_set(self, active)
 
     def seen_stiffness(self, rows: np.ndarray) -> np.ndarray:
