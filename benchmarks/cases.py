@@ -24,6 +24,8 @@ from contactqp import Load, Wall
 from contactqp.builders import channel, flat_patch, obstacle  # noqa: F401 (the groups' scenes)
 from contactqp.model import build_model
 
+MATRIX_TIMEOUT = 20.0  # s: a matrix run is stopped after this long (then skipped, with why)
+
 
 def median_time(function: Callable[[], object], repeats: int) -> float:
     """Median wall time (s) of ``repeats`` calls, after one untimed call that warms caches."""

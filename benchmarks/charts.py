@@ -214,12 +214,12 @@ def redraw(runs: Path, out: Path) -> None:
     """Draw a matrix run's charts again into ``out`` from the runs.json it wrote (or its
     gzip, runs.json.gz, as docs/benchmark/ keeps it)."""
     import profiles
-    from matrix import TIMEOUT
+    from cases import MATRIX_TIMEOUT
 
     data = runs.read_bytes()
     document = json.loads(gzip.decompress(data) if runs.suffix == ".gz" else data)
     draw_all(document["runs"], document["cases"], out, document["wrong_above"])
-    profiles.write(document["runs"], out, TIMEOUT)
+    profiles.write(document["runs"], out, MATRIX_TIMEOUT)
 
 
 if __name__ == "__main__":

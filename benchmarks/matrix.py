@@ -52,6 +52,7 @@ import numpy as np
 
 import contactqp
 from cases import (
+    MATRIX_TIMEOUT,
     default_with,
     floor,
     free_bar,
@@ -74,7 +75,7 @@ REPEATS = {False: lambda first: 5 if first < 0.05 else 3 if first < 0.3 else 1 i
            else 0,
            True: lambda first: 3 if first < 0.05 else 1}
 ISOLATE_FROM = 10**4  # elements: from this size every run goes to a forked child ...
-TIMEOUT = 20.0  # s: ... that is stopped after this long (the run is then skipped, with why)
+TIMEOUT = MATRIX_TIMEOUT  # s: ... that is stopped after this long (then skipped, with why)
 CONDITION_LIMIT = 2000  # unknowns up to which a case's condition numbers are computed (dense)
 BUDGET = 5.0  # s: a run whose time, extrapolated from the previous size, exceeds it is skipped
 GROWTH = 1.5  # the extrapolation: time ~ n^GROWTH (CVXOPT through cvxpy took 30 ms on 1e2

@@ -1,4 +1,4 @@
-"""contactqp.batch: many cases of a prepared scene, solved and checked together.
+"""contactqp.many.batch: many cases of a prepared scene, solved and checked together.
 
 Every expected answer is the exact reference of the case's scene built anew from its parts
 (contactqp.reference, itself tested against closed forms and exact arithmetic), a fresh
@@ -25,7 +25,7 @@ from closed_forms import (
     rebuilt,
     values,
 )
-from contactqp.batch import tiled_scene
+from contactqp.many.batch import tiled_scene
 from contactqp.random_scenes import random_scene
 from contactqp.reference import reference
 
@@ -89,7 +89,7 @@ def test_every_case_verified_in_a_batch_is_right_and_verified_alone(seed, method
             continue
         assert alone.verified, context
         for name, value in alone.residuals.items():  # the batch's are at least its own, but
-            if value is not None:  # for round-off (sums over other cases: contactqp.batch)
+            if value is not None:  # for round-off (sums over other cases: contactqp.many.batch)
                 assert value <= batch.residuals[name][case] + 1e-9, (name, context)
         exact = reference(rebuilt(scene, loads[case], gaps[case]))
         assert_right(batch.u[case], batch.contact_force[case], batch.force_scale[case],

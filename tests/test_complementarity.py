@@ -20,6 +20,7 @@ from closed_forms import DEFAULT_F, default_closed_form
 from contactqp.builders import flat_patch
 from contactqp.methods.complementarity import LEMKE_ROWS, NEWTON_FB_ROWS, PGS_WORK, pgs_sweeps
 from contactqp.model import build_model
+from contactqp.model.chain import layout_of
 from contactqp.random_scenes import random_scene
 from contactqp.reference import reference
 
@@ -70,7 +71,7 @@ def test_lemke_and_newton_are_exact_where_lagrange_is(seed):
         # element, times the stiffness a wall beside a stiff one sees (seed 3988435278: Lemke
         # 2.9e-4 N off, a clamped node 2e-9 m into its zero-gap wall beside 1.1e11 N/m,
         # 1.4e-5 of F: flagged, its error within the check's bound)
-        stiffness = scene.layout.element_stiffness
+        stiffness = layout_of(scene).element_stiffness
         if roundoff * stiffness.max() / stiffness.min() <= 1e-7 * result.force_scale:
             assert result.verified, (seed, method, options, result.message)
         else:  # verified or not, the check's bound holds the error

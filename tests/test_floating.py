@@ -17,7 +17,7 @@ import pytest
 
 import contactqp
 from contactqp import Bar, BarContact, Load, Scene, Support, Wall
-from contactqp.held import MAX_FLOATING_BARS, unheld_bars
+from contactqp.model.chain.floating import MAX_FLOATING_BARS, unheld_bars
 from contactqp.reference import reference
 
 E = 200e9

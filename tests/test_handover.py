@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import contactqp
-from contactqp.model.handover import problem_from_scene
+from contactqp.model.chain.to_problem import problem_from_scene
 from contactqp.random_scenes import random_scene
 
 

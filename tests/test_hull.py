@@ -15,8 +15,8 @@ from hypothesis import strategies as st
 import contactqp
 from closed_forms import imported_by
 from contactqp import Bar, DistributedLoad, Load, Scene, SceneError, Support, Wall
-from contactqp.methods import minorant
-from contactqp.methods.minorant import minorant_slopes, minorant_vertices
+from contactqp.methods.hull import minorant
+from contactqp.methods.hull.minorant import minorant_slopes, minorant_vertices
 from contactqp.random_scenes import random_scene
 from contactqp.reference import reference
 

@@ -13,9 +13,10 @@ import pytest
 
 import contactqp
 from contactqp import Bar, DistributedLoad, Load, Scene, Support, Wall
-from contactqp.methods import hull, minorant
+from contactqp.methods import hull
+from contactqp.methods.hull import minorant
 from contactqp.model import spread
-from contactqp.model.chain import scene_model
+from contactqp.model.chain.model import scene_model
 from contactqp.reference import reference
 
 

@@ -18,8 +18,8 @@ import pytest
 
 import contactqp
 from closed_forms import values
-from contactqp.batch import tiled_scene
-from contactqp.methods.cases import FEW_COLUMNS, row_reduce
+from contactqp.many.batch import tiled_scene
+from contactqp.methods.load_cases import FEW_COLUMNS, row_reduce
 from contactqp.model import build_model
 from contactqp.random_scenes import random_scene
 from contactqp.scene.scene import Scene, ValuedLoads

@@ -23,6 +23,7 @@ from closed_forms import (
     values,
 )
 from contactqp import Load, Wall
+from contactqp.model.chain import layout_of
 
 RUNS = [("lagrange", {}), ("penalty", {}), ("augmented", {}),
         ("qp", {"backend": "clarabel"}), ("qp", {"backend": "osqp"}),
@@ -139,7 +140,7 @@ def test_a_batch_of_equality_contact_has_no_complementarity_residual():
 
 def test_the_layout_shares_what_the_values_leave_alone():
     scene = contactqp.default_scene()
-    layout = scene.layout
+    layout = layout_of(scene)
     layout.rows, layout.element_stiffness, layout.nodal_loads  # noqa: B018 (made)
     other = scene.with_values([2.0e5], [3e-4])
     assert other.layout.element_stiffness is layout.element_stiffness

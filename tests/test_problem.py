@@ -53,7 +53,7 @@ BAD = [
     ({"C": sp.csr_array(np.array([[0, 0, 0, 0, 1.0], [0, 0, 0, 0, -1.0]])),
       "g": np.array([0.5, -0.7])}, "are opposite and their gaps (0.5 and -0.7 per unit row)"),
     ({"C": sp.csr_array(np.array([[0, 0, 0, 0, 1.0], [1.0, 0, 0, 0, 0]])),
-      "prescribed": [0]}, "prescribed dof 0 is inside contact row 1"),
+      "prescribed": [0]}, "contact row 1 touches prescribed dofs only"),
     ({"prescribed": [7]}, "prescribed dof 7 is outside 0..4"),
     ({"prescribed": [1, 1]}, "prescribed dof 1 is listed twice"),
     ({"prescribed": [1], "prescribed_values": [1.0, 2.0]}, "prescribed_values must have shape (1,)"),

@@ -14,7 +14,7 @@ import scipy.sparse as sp
 import contactqp
 from closed_forms import imported_by
 from contactqp.errors import ProblemError, SolverError
-from contactqp.problem_feasibility import conflicting_rows
+from contactqp.feasibility.rows import conflicting_rows
 
 
 def stiffness(rng: np.random.Generator, n: int) -> sp.csr_array:

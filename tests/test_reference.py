@@ -44,7 +44,7 @@ from contactqp.model import (
     Layout,
 )
 from contactqp.reference import reference, statics_reference
-from contactqp.reference_exact import (
+from contactqp.reference.exact import (
     ENUMERATION_BUDGET,
     MAX_EXACT_NODES,
     _ExactScene,

@@ -16,6 +16,7 @@ from contactqp.builders import flat_patch
 from contactqp.check.chain import certificate as bounds
 from contactqp.check.chain import spans as runs
 from contactqp.model import segment_reduce
+from contactqp.model.chain import layout_of
 from contactqp.random_scenes import random_scene
 from contactqp.reference import reference
 
@@ -75,7 +76,7 @@ def test_a_prepared_scene_shares_its_kept_sets_and_they_stay_read_only():
     scene = contactqp.default_scene()
     prepared = contactqp.prepare(scene)
     prepared.solve([1.2 * scene.loads[0].force])
-    cache = prepared.scene.layout.held_cache
+    cache = layout_of(prepared.scene).held_cache
     assert cache, "the check kept nothing"
     again = prepared.scene.with_values(loads=[0.8 * scene.loads[0].force])
     assert again.layout.held_cache is cache  # one topology, one set of kept runs
@@ -90,7 +91,7 @@ def test_what_is_kept_stays_within_its_budget(monkeypatch):
     monkeypatch.setattr(runs, "KEPT_BYTES", 4096)
     scene = flat_patch(2000)
     contactqp.solve(scene)
-    cache = scene.layout.held_cache
+    cache = layout_of(scene).held_cache
     assert sum(entry[2] for entry in cache.values()) <= 4096
 
 
@@ -131,7 +132,7 @@ def test_runs_of_one_short_length_reduce_as_reduceat_does(ufunc):
     # and at its wall, so that every run is the same four elements; signed zeros and NaN
     # among the values, where the order of a maximum decides which comes out
     prepared = contactqp.prepare(contactqp.default_scene())
-    layout = prepared.tiled(300).scene.layout
+    layout = layout_of(prepared.tiled(300).scene)
     held = np.sort(np.concatenate((layout.node_offsets[:-1], layout.node_offsets[1:] - 1)))
     found = runs.runs(layout, held)
     assert found.length == 4 and found.starts.size == 300

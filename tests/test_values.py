@@ -1,4 +1,4 @@
-"""Bad input from Python (contactqp.values and every place a value enters): one ContactqpError
+"""Bad input from Python (contactqp._validate and every place a value enters): one ContactqpError
 naming the field or option and the value, never a traceback, never a warning.
 """
 

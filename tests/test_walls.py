@@ -4,7 +4,7 @@ Result bit for bit, on random scenes and on each builder; bad arrays one line ea
 scene-file form round trip.
 
 The expected side of every comparison is the object path, which builds each wall as a Wall and
-reads it field by field (contactqp.layout.numbering._wall_columns' loop); the builders' object
+reads it field by field (contactqp.model.chain.numbering._wall_columns' loop); the builders' object
 form is rebuilt here wall by wall, as they were written before they made arrays."""
 
 from __future__ import annotations

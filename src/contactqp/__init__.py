@@ -30,11 +30,11 @@ from contactqp.errors import (
     SolverError,
     SolverNotAvailable,
 )
+from contactqp.many.prepared import Batch, Prepared, prepare
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.qp import QPProblem, available_qp_solvers, qp_problem
 from contactqp.model import Layout, Model, build_model
-from contactqp.model.handover import problem_from_scene
-from contactqp.prepared import Batch, Prepared, prepare
+from contactqp.model.chain.to_problem import problem_from_scene
 from contactqp.problem import Problem
 from contactqp.problem_files import load_problem, save_problem
 from contactqp.report import detail_table, table

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from contactqp._validate import whole_number
 from contactqp.errors import SceneError
 from contactqp.scene import (
     UNIT_SYSTEMS,
@@ -23,7 +24,6 @@ from contactqp.scene import (
     WallSide,
 )
 from contactqp.scene.walls import checked_gaps
-from contactqp.values import whole_number
 
 # The default scene: a standard course problem.
 DEFAULT_LENGTH = 1.0  # m

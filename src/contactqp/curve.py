@@ -22,14 +22,14 @@ from typing import Any
 
 import numpy as np
 
+from contactqp._validate import whole_number
 from contactqp.errors import ContactqpError, OptionError
+from contactqp.many.prepared import prepare
 from contactqp.model import Model, scene_model, wall_stiffness
-from contactqp.prepared import prepare
 from contactqp.progress import Progress, as_progress
 from contactqp.result import Result, plain
 from contactqp.scene import MAX_ELEMENTS, Scene
 from contactqp.solve import as_scene
-from contactqp.values import whole_number
 
 # name -> (method, contact, options): unilateral contact, the textbook equality (which pulls
 # before the wall is reached), the penalty, the augmented Lagrangian and a cvxpy QP; and

@@ -21,7 +21,8 @@ symmetric. What is checked when it is made (:mod:`contactqp._validate` for the a
   soft block cannot hide an asymmetry behind a stiff one; K_ii >= 0 and K_ij² <= K_ii K_jj
   (every 2 x 2 block positive semidefinite), which refuses most indefinite K at once;
 - C's rows: none zero, no constraint given twice, rows some u meets all at once
-  (:mod:`contactqp.problem_feasibility`); prescribed dofs in no contact row.
+  (:mod:`contactqp.feasibility.rows`), none on prescribed dofs alone (a row may touch a
+  prescribed dof: its support then carries the row's force too).
 
 What needs a factorisation of K (a negative pivot: K indefinite; rigid modes that nothing
 holds) is found when the model is built (:mod:`contactqp.model.sparse`). Files:
@@ -39,7 +40,7 @@ import scipy.sparse as sp
 
 from contactqp import _validate
 from contactqp.errors import ProblemError
-from contactqp.problem_feasibility import row_conflict
+from contactqp.feasibility.rows import row_conflict
 
 KINDS = ("inequality", "equality")
 SYMMETRY_RTOL = 1e-10  # |K_ij − K_ji| may be this much of √(K_ii K_jj) (round-off)
@@ -62,8 +63,8 @@ class Problem:
     g : array, m
         Gaps (length units): positive open, negative a press fit.
     prescribed : int array, optional
-        Degrees of freedom held at ``prescribed_values`` (default 0); no contact row may
-        touch one.
+        Degrees of freedom held at ``prescribed_values`` (default 0). A contact row may touch
+        one (a punch whose motion is given); its support then carries the row's force.
     prescribed_values : array, optional
         Their displacements (length units).
     kinds : sequence of str, optional
@@ -167,11 +168,14 @@ def _prescribed(problem: Problem, n: int, C: sp.csr_array) -> tuple[np.ndarray, 
             else _validate.index_vector("prescribed", problem.prescribed, n))
     values = (_validate.frozen(np.zeros(dofs.size)) if problem.prescribed_values is None
               else _validate.vector("prescribed_values", problem.prescribed_values, dofs.size))
-    touched = C[:, dofs].tocoo() if dofs.size and C.shape[0] else None
-    if touched is not None and touched.nnz:
-        row, dof = int(touched.row[0]), int(dofs[touched.col[0]])
-        raise ProblemError(f"prescribed dof {dof} is inside contact row {row}: a contact row "
-                           "may only involve free dofs (move its part into g)")
+    if dofs.size and C.shape[0]:
+        held = np.zeros(n, dtype=bool)
+        held[dofs] = True
+        free_entries = np.bincount(C.tocoo().row[~held[C.indices]], minlength=C.shape[0])
+        only = np.flatnonzero(free_entries == 0)
+        if only.size:
+            raise ProblemError(f"contact row {int(only[0])} touches prescribed dofs only: it "
+                               "constrains no free dof (drop it, or free a dof it touches)")
     return dofs, values
 
 

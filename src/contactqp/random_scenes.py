@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp.errors import SceneError
-from contactqp.held import unheld_bars
 from contactqp.model import build_model
+from contactqp.model.chain.floating import unheld_bars
 from contactqp.scene import Bar, BarContact, DistributedLoad, Load, Scene, Support, Wall
 
 

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from contactqp._validate import number
 from contactqp.builders import wall_at_every_node
 from contactqp.errors import SceneError
 from contactqp.scene import (
@@ -25,7 +26,6 @@ from contactqp.scene import (
     Wall,
     Walls,
 )
-from contactqp.values import number
 
 _TOP_KEYS = {"name", "units", "material", "bar", "support", "load", "wall", "walls",
              "distributed_load", "contact", "obstacle"}

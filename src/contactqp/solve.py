@@ -15,13 +15,13 @@ import numpy as np
 from contactqp.builders import default_scene
 from contactqp.errors import OptionError, ProblemError, SceneError, SolverError
 from contactqp.feasibility import equality_conflict
-from contactqp.held import unheld_bars
+from contactqp.feasibility.rows import conflicting_rows
 from contactqp.methods import Method, checked_options, hull
 from contactqp.methods.base import Solution
 from contactqp.model import Condensed, Model, condensed_model, scene_model
+from contactqp.model.chain.floating import unheld_bars
 from contactqp.model.sparse import problem_model
 from contactqp.problem import Problem
-from contactqp.problem_feasibility import conflicting_rows
 from contactqp.result import Result, make_result
 from contactqp.scene import Scene
 from contactqp.scene_io import load_scene
@@ -67,7 +67,7 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
         method is not Lagrange with its hull active set, else "full"; the same answer, and the
         Result's options say which ran), "full" (every free node an unknown), "condensed" (the
         method sees only the nodes that carry contacts, a chain again, and every displacement
-        is recovered by statics: :func:`contactqp.model.condense`) or "strain" (lagrange and
+        is recovered by statics: :func:`contactqp.model.chain.condensed`) or "strain" (lagrange and
         qp only: the element elongations are unknowns too, tied to the displacements by
         equality rows whose multipliers are the element forces:
         :func:`contactqp.model.elongation_rows`).
@@ -128,7 +128,7 @@ def solve_problem(problem: Problem, method: Any, contact: Any, formulation: Any,
     take it, the solve and its check. A solve with ``contact="equality"`` that fails (a
     SolverError, or an answer the check does not verify) on rows that, held on their gaps, no
     u meets all at once ends in a ProblemError naming them
-    (:mod:`contactqp.problem_feasibility`)."""
+    (:mod:`contactqp.feasibility.rows`)."""
     spec, options = checked_options(method, contact, formulation, options)
     if formulation != "auto":
         raise OptionError(f"formulation={formulation!r} applies to bar scenes; a Problem "

@@ -36,7 +36,7 @@ from contactqp.check.residuals import (
 )
 from contactqp.errors import OptionError
 from contactqp.model.base import ContactModel, natural_map
-from contactqp.model.chain import Model
+from contactqp.model.chain.model import Model
 from contactqp.model.sparse import as_sparse_model
 from contactqp.scene import Scene
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from contactqp._validate import number, whole_number
 from contactqp.errors import ProblemError
-from contactqp.values import number, whole_number
 
 MAX_NODES = 2_000_000  # a mesh larger than this (4·10⁶ dofs in 2D) is refused: minutes to build
 

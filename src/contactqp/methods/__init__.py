@@ -16,6 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from contactqp._validate import flag, positive_number, whole_number
 from contactqp.errors import OptionError
 from contactqp.methods.augmented import DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, solve_augmented
 from contactqp.methods.base import Solution
@@ -30,7 +31,6 @@ from contactqp.methods.nitsche import THETAS, solve_nitsche
 from contactqp.methods.penalty import solve_penalty
 from contactqp.methods.qp import BACKENDS, solve_qp
 from contactqp.methods.qp.settings import ACCURACIES
-from contactqp.values import flag, positive_number, whole_number
 
 CONTACT_KINDS = ("inequality", "equality")  # the contact rows as C u <= g, or as C u = g
 FORMULATIONS = ("full", "condensed", "strain")

@@ -7,8 +7,8 @@ from collections.abc import Callable
 import numpy as np
 
 from contactqp.errors import SolverError
-from contactqp.held import wedged_rows
 from contactqp.model import Model, bar_groups
+from contactqp.model.chain.floating import wedged_rows
 
 Step = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 Update = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -57,7 +57,7 @@ def pinning(model: Model) -> Callable[[np.ndarray], np.ndarray]:
     def pin(active: np.ndarray) -> np.ndarray:
         active = np.array(active, dtype=bool)
         while True:
-            labels = bar_groups(scene, active)  # the ground's label last
+            labels = bar_groups(layout, active)  # the ground's label last
             free = np.flatnonzero(labels[:-1] != labels[-1])
             if free.size == 0:
                 return active

@@ -1,16 +1,18 @@
 """Scene → model: everything later stages need to know about the algebra.
 
-- :mod:`contactqp.layout` (re-exported here, and as ``contactqp.model.layout``): the
+- :mod:`contactqp.model.chain.layout_names` (re-exported here, and as ``contactqp.model.chain.layout_names``): the
   numbering of the nodes and the arrays along the chain (element stiffnesses, compliance,
   contact rows, nodal loads), and what is computed from them;
-- :mod:`~contactqp.model.chain`: the Model, K (band), P, C, g, the solves with K, the scales
+- :mod:`~contactqp.model.chain.model`: the Model, K (band), P, C, g, the solves with K, the scales
   F and U;
-- :mod:`~contactqp.model.condense`: the problem condensed onto the contact nodes;
-- :mod:`~contactqp.model.reading`: what methods read off a model besides its solves with K
+- :mod:`~contactqp.model.chain.condensed`: the problem condensed onto the contact nodes;
+- :mod:`~contactqp.model.chain.quantities`: what methods read off a model besides its solves with K
   (the strain formulation's rows, the stiffness the walls see, forces without circulation).
 """
 
-from contactqp.layout import (
+from contactqp.model.base import ContactModel, ScaleTerms
+from contactqp.model.chain.condensed import Condensed, condense, condensed_model
+from contactqp.model.chain.layout_names import (
     LONG_SEGMENTS,
     ContactRows,
     Layout,
@@ -32,16 +34,14 @@ from contactqp.layout import (
     segment_reduce,
     spread,
 )
-from contactqp.model.base import ContactModel, ScaleTerms
-from contactqp.model.chain import (
+from contactqp.model.chain.model import (
     Model,
     build_model,
     determinate_chain_solve,
     scene_model,
     support_reactions,
 )
-from contactqp.model.condense import Condensed, condense, condensed_model
-from contactqp.model.reading import elongation_rows, wall_stiffness, without_circulation
+from contactqp.model.chain.quantities import elongation_rows, wall_stiffness, without_circulation
 
 __all__ = [
     "LONG_SEGMENTS",

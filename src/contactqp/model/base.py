@@ -1,5 +1,5 @@
 """The model protocol: what every model offers the methods and the check, whichever front end
-made it (a bar scene's chain, :mod:`contactqp.model.chain`, or a user's K, f, C, g,
+made it (a bar scene's chain, :mod:`contactqp.model.chain.model`, or a user's K, f, C, g,
 :mod:`contactqp.model.sparse`).
 
 A model is the problem in its free dofs (the prescribed ones condensed out):
@@ -84,10 +84,18 @@ class ScaleTerms:
     softest: float
 
 
+ROUND_OFF_LENGTH = 1e-12  # of the largest force over the softest stiffness: round-off of u₀
+
+
 def displacement_scale(terms: ScaleTerms) -> float:
-    """U by its rule (module docstring)."""
+    """U by its rule (module docstring); ‖u₀‖∞ and how far it passes a row count where they
+    are more than the round-off of u₀, ROUND_OFF_LENGTH of the largest force term over the
+    softest stiffness (a floating body's balanced loads leave u₀ = 1e-38 m on one front end,
+    0 on the other)."""
+    force = max(terms.loads, terms.reactions, terms.contact, terms.unbalanced)
+    noise = ROUND_OFF_LENGTH * force / terms.softest if terms.softest > 0.0 else 0.0
     scale = max(terms.free, terms.passed)
-    if scale > 0.0:
+    if scale > noise:
         return scale
     return terms.widest if terms.widest > 0.0 else (terms.size if terms.size > 0.0 else 1.0)
 

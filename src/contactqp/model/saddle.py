@@ -65,6 +65,27 @@ def row_scale(K: sp.sparray) -> float:
     return float(np.ldexp(1.0, np.frexp(top)[1])) if 0.0 < top < np.inf else 1.0
 
 
+DEPENDENT = 1e-10  # a pivot of the rows' unit-diagonal Gram matrix below this: rows repeat
+
+
+def rows_dependent(C_A: sp.csr_array) -> bool:
+    """Whether some rows of C_A are a combination of others (they repeat a constraint, and
+    their forces are not unique): a pivot of C_A C_Aᵀ, scaled to a unit diagonal, below
+    DEPENDENT (sparse LU; on a chain C_A C_Aᵀ is banded). A banded LU of the saddle-point
+    system need not say so: round-off leaves its pivot 1e-16 instead of 0, and the answer
+    carries forces of 1e5 that cancel (measured: walls on both sides of a node)."""
+    gram = sp.csc_matrix(C_A @ C_A.T)
+    scale = 1.0 / np.sqrt(gram.diagonal())
+    gram = sp.csc_matrix(sp.diags_array(scale) @ gram @ sp.diags_array(scale))
+    import scipy.sparse.linalg as spla  # at the first solve, not at start-up
+
+    try:
+        factor = spla.splu(gram, diag_pivot_thresh=1.0)
+    except RuntimeError:  # "Factor is exactly singular"
+        return True
+    return bool(np.abs(factor.U.diagonal()).min(initial=1.0) < DEPENDENT)
+
+
 def set_solve(K: sp.sparray, C_A: sp.csr_array, force: np.ndarray, gap: np.ndarray
               ) -> tuple[np.ndarray, np.ndarray, bool]:
     """(u, λ_A, redundant) with K u + C_Aᵀλ_A = force and C_A u = gap (module docstring); a
@@ -72,11 +93,12 @@ def set_solve(K: sp.sparray, C_A: sp.csr_array, force: np.ndarray, gap: np.ndarr
     n = K.shape[0]
     if C_A.shape[0] == 0:
         return linalg.solve(K, force, spd=True), np.zeros(0), False
-    try:
-        u, lam = solve_saddle_point(K, force, C_A, gap)
-        return u, lam, False
-    except SolverError:
-        pass
+    if not rows_dependent(C_A):
+        try:
+            u, lam = solve_saddle_point(K, force, C_A, gap)
+            return u, lam, False
+        except SolverError:  # K singular along a mode the rows leave free
+            pass
     scale = row_scale(K)
     matrix = saddle_point_system(K, C_A * scale)
     shift = REDUNDANT_SHIFT * scale
@@ -90,5 +112,5 @@ def set_solve(K: sp.sparray, C_A: sp.csr_array, force: np.ndarray, gap: np.ndarr
     return x[:n], x[n:] * scale, True
 
 
-__all__ = ["REDUNDANT_SHIFT", "banded_order", "row_scale", "saddle_point_system", "set_solve",
-           "solve_saddle_point"]
+__all__ = ["DEPENDENT", "REDUNDANT_SHIFT", "banded_order", "row_scale", "rows_dependent",
+           "saddle_point_system", "set_solve", "solve_saddle_point"]

@@ -6,8 +6,10 @@ The methods and the check call the same few operations the chain model offers: s
 and the scales F and U.
 
 Condensing (scikit-fem's ``condense``): with I the free dofs and D the prescribed ones, the
-unknowns are u_I, K_II u_I = f_I − K_ID u_D − C_Iᵀλ; C has no entry on D (the problem checks
-it), so the contact rows are C_I.
+unknowns are u_I, K_II u_I = f_I − K_ID u_D − C_Iᵀλ, and the rows C_I u_I <= g − C_D u_D (a
+row may touch a prescribed dof: a contact against a moving punch, a bar contact that ends at
+a support); the support of a prescribed dof then carries the row's force too, R_D = K_D u −
+f_D + C_Dᵀλ.
 
 The factorisation is SuperLU's (``scipy.sparse.linalg.splu``) with the minimum-degree ordering
 of Kᵀ + K and no pivoting off the diagonal (K is symmetric positive definite): measured on a
@@ -230,8 +232,19 @@ class SparseModel(ContactModel):
         return self.factor is None
 
     def reactions_of(self, u: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
-        """Each prescribed dof's force, (K u − f) there (no contact row acts on one)."""
-        return self.reactions(u)
+        """Each prescribed dof's force, (K u − f + Cᵀλ) there: what it takes to hold the dof
+        against the elements, the loads and the rows that push on it."""
+        problem = self.problem
+        reactions = self.reactions(u)
+        if reactions.size and self.pushes_supports:
+            reactions = reactions + problem.C[:, problem.prescribed].T @ contact_force
+        return reactions
+
+    @cached_property
+    def pushes_supports(self) -> bool:
+        """Whether a contact row touches a prescribed dof."""
+        problem = self.problem
+        return bool(problem.prescribed.size and problem.C[:, problem.prescribed].nnz)
 
     @cached_property
     def modes(self) -> np.ndarray:
@@ -291,8 +304,8 @@ class SparseModel(ContactModel):
         return u
 
     def reactions(self, u: np.ndarray) -> np.ndarray:
-        """The force each prescribed dof's support applies: (K u − f) there (no contact row
-        acts on a prescribed dof)."""
+        """What the elements and loads ask of each prescribed dof's support: (K u − f) there
+        (with no contact force; :meth:`reactions_of` adds the rows')."""
         problem = self.problem
         if not problem.prescribed.size:
             return np.zeros(0)
@@ -380,7 +393,7 @@ def problem_model(problem: Problem) -> SparseModel:
     """The model of ``problem``, built once and kept with it: a Problem owns read-only
     arrays and does not change, so every later solve, check or study of the same problem
     object reuses the model and what it has worked out (K's factorisation, K⁻¹P, the scales,
-    the columns of W), as :func:`contactqp.model.chain.scene_model` does for a scene."""
+    the columns of W), as :func:`contactqp.model.chain.model.scene_model` does for a scene."""
     model = problem.__dict__.get(_KEPT_MODEL)
     if model is None:
         model = problem.__dict__[_KEPT_MODEL] = build_sparse_model(problem)
@@ -414,6 +427,9 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseMode
     P = problem.f[free] - (K[free][:, problem.prescribed] @ problem.prescribed_values
                            if problem.prescribed.size else 0.0)
     C = sp.csr_array(problem.C[:, free])
+    g = problem.g
+    if problem.prescribed.size and problem.C[:, problem.prescribed].nnz:  # rows on a support
+        g = g - problem.C[:, problem.prescribed] @ problem.prescribed_values
     factor, cache, candidates = _factor_or_none(K_II, ordering)
     floating = None
     if factor is None:
@@ -422,7 +438,7 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseMode
             factor, cache = _plain_factor(K_II, ordering)
         else:
             _held_by_contact(problem, free, C, floating)
-    return SparseModel(problem, free, K_II, P, C, problem.g, factor, floating, cache)
+    return SparseModel(problem, free, K_II, P, C, g, factor, floating, cache)
 
 
 def _plain_factor(K: sp.csc_matrix, ordering: str) -> tuple[spla.SuperLU, ColumnCache]:

@@ -11,6 +11,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from contactqp.curve import LoadPath
+from contactqp.model.chain import layout_of
 from contactqp.plot.common import (
     FAILED,
     engineering,
@@ -45,7 +46,7 @@ def plot_load_path(path: LoadPath, kink: float | None = None) -> Figure:
             ax.axvline(kink, color="0.5", linestyle=":",
                        label=f"first contact closes (closed form): t = {kink:.4g}"
                        if ax is top else None)
-    layout = path.scene.layout
+    layout = layout_of(path.scene)
     bar = int(layout.node_bar[path.load_node])
     where = (f"node {path.load_node}" if len(path.scene.bars) == 1 else
              f"bar {bar} node {path.load_node - int(layout.node_offsets[bar])}")

@@ -15,6 +15,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from contactqp._validate import number, positive_numbers, whole_number
 from contactqp.errors import SceneError
 from contactqp.scene.sections import (
     AreaRule,
@@ -22,7 +23,6 @@ from contactqp.scene.sections import (
     Section,
     section_areas,
 )
-from contactqp.values import number, positive_numbers, whole_number
 
 WallSide = Literal["+", "-"]
 WALL_SIDES = ("+", "-")

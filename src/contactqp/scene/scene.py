@@ -7,16 +7,16 @@ determine the contact forces); :func:`row_names`, how messages name its contact 
 from __future__ import annotations
 
 import copy
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
 
 import numpy as np
 
+from contactqp._validate import number, one_of, text, value_array
 from contactqp.errors import OptionError, SceneError
 from contactqp.feasibility import impossible_constraints, indeterminate_contacts
-from contactqp.layout import Layout
 from contactqp.scene.parts import (
     MAX_ELEMENTS,
     Bar,
@@ -36,7 +36,11 @@ from contactqp.scene.validation import (
 )
 from contactqp.scene.walls import ReadAsItems, Walls
 from contactqp.units import UNIT_SYSTEMS, Units
-from contactqp.values import number, one_of, text, value_array
+
+# The chain model's numbering, registered by contactqp.model.chain.numbering when it is
+# imported (import contactqp imports it): Scene.layout reads it through this, so that a scene
+# imports nothing of the model that reads it
+NUMBERING: list[Callable[[Any], Any]] = []
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,7 +49,7 @@ class Scene:
 
     ``bars``: one :class:`Bar` or a sequence of them (kept as a tuple either way). A bar
     with no support is held by its walls and bar contacts alone; its loads must press it
-    against them (checked at the solve, :func:`contactqp.held.unheld_bars`). Contact rows, in this order everywhere (contact forces, penetrations):
+    against them (checked at the solve, :func:`contactqp.model.chain.floating.unheld_bars`). Contact rows, in this order everywhere (contact forces, penetrations):
     one per wall, then one per bar contact. ``units``: :data:`UNIT_SYSTEMS`.
 
     Parameters
@@ -110,11 +114,15 @@ class Scene:
         if conflict:
             raise SceneError(conflict)
 
-    @cached_property
-    def layout(self) -> Layout:
+    @property
+    def layout(self) -> Any:
         """The numbering of the scene's nodes and the arrays along it
-        (:class:`~contactqp.model.Layout`), made once per scene: a scene does not change."""
-        return Layout(self)
+        (:class:`~contactqp.model.Layout`), made once per scene by the chain model
+        (:func:`contactqp.model.chain.layout_of`, which this reaches through
+        :data:`NUMBERING`: a scene knows no numbering, and imports none)."""
+        if not NUMBERING:
+            raise SceneError("scene.layout needs the chain model: import contactqp")
+        return NUMBERING[0](self)
 
     @property
     def unit(self) -> Units:
@@ -158,7 +166,7 @@ class Scene:
         depend on the values with this scene's (:meth:`Layout.with_values`).
         ``load_objects=False`` keeps the point loads' forces as an array, their Load objects
         made only when they are read one by one (:attr:`load_forces` reads the array): for a
-        batch's scene of many cases (:mod:`contactqp.batch`)."""
+        batch's scene of many cases (:mod:`contactqp.many.batch`)."""
         changes: dict[str, Any] = {}
         if loads is not None:
             n_point = len(self.loads)
@@ -188,8 +196,10 @@ class Scene:
             conflict = _conflict(scene, self)
             if conflict:
                 raise SceneError(conflict)
+        # a numbering already made for this scene (contactqp.model.chain.layout_of) shares
+        # with the new scene's every array that does not depend on the values
         if "layout" in self.__dict__:
-            scene.__dict__["layout"] = self.layout.with_values(scene)
+            scene.__dict__["layout"] = self.__dict__["layout"].with_values(scene)
         return scene
 
     @property

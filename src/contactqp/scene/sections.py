@@ -12,8 +12,8 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
+from contactqp._validate import number
 from contactqp.errors import SceneError
-from contactqp.values import number
 
 AreaRule = Literal["midpoint", "exact"]
 AREA_RULES = ("midpoint", "exact")

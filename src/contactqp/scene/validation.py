@@ -5,17 +5,16 @@ something. Each error names the field as a scene file spells it, and the value.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from contactqp._validate import MAGNITUDE, number, whole_number
 from contactqp.errors import SceneError
 from contactqp.scene.parts import WALL_SIDES, Bar, Wall
 from contactqp.scene.walls import Walls, check_wall_set
-from contactqp.values import MAGNITUDE, number, whole_number
 
-if TYPE_CHECKING:
-    from contactqp.scene.scene import Scene
+Scene = Any  # the Scene being built (contactqp.scene.scene), which imports this module
 
 
 def _numbering(bars: tuple[Bar, ...]):
@@ -40,7 +39,7 @@ def _numbering(bars: tuple[Bar, ...]):
 def _check_supports(scene: Scene, node) -> dict[int, int]:
     """No node held twice, not every node held, and something to hold a bar that has no
     support (a wall or a bar contact: whether its loads press it against one is decided with
-    the contact kind, :func:`contactqp.held.unheld_bars`): {node: support index}."""
+    the contact kind, :func:`contactqp.model.chain.floating.unheld_bars`): {node: support index}."""
     held: dict[int, int] = {}
     for i, s in enumerate(scene.supports):
         at = node(f"support[{i}]", s.bar, s.node)

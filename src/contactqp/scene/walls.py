@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
+from contactqp._validate import MAGNITUDE, is_number, shown
 from contactqp.errors import SceneError
 from contactqp.scene.parts import MAX_ELEMENTS, WALL_SIDES, Wall
-from contactqp.values import MAGNITUDE, is_number, shown
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
@@ -211,7 +211,7 @@ class Walls(ReadAsItems):
 
     def tiled(self, copies: int, bars: int) -> Walls:
         """These walls repeated ``copies`` times, one copy after another, copy c on the bars
-        ``c·bars`` further on (a batch's scene: :func:`contactqp.batch.tiled_scene`)."""
+        ``c·bars`` further on (a batch's scene: :func:`contactqp.many.batch.tiled_scene`)."""
         shift = bars * np.arange(copies, dtype=np.intp)[:, None]
         return self._made(np.tile(self.nodes, copies), np.tile(self.gaps, copies),
                           np.tile(self.sides, copies), (self.bars + shift).ravel(), self.name)

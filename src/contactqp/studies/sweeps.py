@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from contactqp._validate import positive_values
 from contactqp.builders import default_scene
 from contactqp.errors import ContactqpError, OptionError
 from contactqp.model import largest
@@ -17,7 +18,6 @@ from contactqp.result import Result, plain
 from contactqp.scene import Load, Scene
 from contactqp.solve import as_scene, solve
 from contactqp.studies.comparison import ROUND_OFF, Run, study_size
-from contactqp.values import positive_values
 
 SWEEP_PENALTIES = (1.0,) + tuple(10.0 ** k for k in range(5, 21))  # N/m: 1, 1e5, 1e6 … 1e20
 

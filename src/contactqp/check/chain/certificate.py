@@ -16,7 +16,6 @@ import numpy as np
 from contactqp.check.chain.bar_contacts import contact_give, pushing_pairs, through_pairs
 from contactqp.check.chain.self_stress import opposed_forces, rerouted_forces
 from contactqp.check.chain.spans import Running, count_at_or_before, kept, propagate
-from contactqp.held import wedged_bars, wedged_rows
 from contactqp.model import (
     Layout,
     bar_groups,
@@ -26,6 +25,7 @@ from contactqp.model import (
     penetration,
     seen_stiffness,
 )
+from contactqp.model.chain.floating import wedged_bars, wedged_rows
 
 ROUND_OFF = 4.0 * np.finfo(float).eps  # a few units in the last place of what is stored
 
@@ -179,7 +179,7 @@ def _pushing(layout: Layout, lam: np.ndarray, pen: np.ndarray, hold: float,
 
 
 def _wedged(layout: Layout) -> np.ndarray:
-    """:func:`contactqp.held.wedged_rows` of the scene (all False where every bar has
+    """:func:`contactqp.model.chain.floating.wedged_rows` of the scene (all False where every bar has
     a support, without looking at the walls)."""
     if not layout.floating_bars.size:
         return np.zeros(layout.rows[3].size, dtype=bool)
@@ -218,7 +218,7 @@ def unpinned_bar(layout: Layout, pushing: np.ndarray) -> int | None:
     (through other bars), or None: nothing in the answer fixes where such a bar is."""
     if not layout.floating_bars.size:
         return None
-    labels = bar_groups(layout.scene, pushing)
+    labels = bar_groups(layout, pushing)
     loose = np.setdiff1d(np.flatnonzero(labels[:-1] != labels[-1]),
                          list(wedged_bars(layout.scene)))
     return int(loose[0]) if loose.size else None

@@ -5,7 +5,7 @@ run by run with the held nodes fixed (:func:`propagate`).
 
 The runs and the stiffnesses depend on the held nodes, the bars and the stiffnesses alone,
 never on the load values, the gaps or the answer's values, so they are kept on the layout
-(:attr:`contactqp.layout.Layout.held_cache`, shared by the layouts of one prepared scene) for
+(:attr:`contactqp.model.chain.layout_names.Layout.held_cache`, shared by the layouts of one prepared scene) for
 the last few held sets: a scene solved again, ``prepared.solve`` and ``solve_many`` meet the
 same sets again and again. What is kept is what would be computed, bit for bit.
 """

@@ -27,10 +27,10 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from contactqp._validate import flag
 from contactqp.errors import OptionError
 from contactqp.model import Condensed, ContactModel, Model, build_model, elongation_rows
 from contactqp.scene import Scene
-from contactqp.values import flag
 
 
 @dataclass(frozen=True, eq=False)

@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from contactqp.model.layout import Layout
+from contactqp.model.chain.layout_names import Layout
+from contactqp.model.chain.numbering import layout_of
 from contactqp.problem import Problem
 from contactqp.scene import Scene, row_names
 
@@ -15,9 +16,10 @@ from contactqp.scene import Scene, row_names
 def problem_from_scene(scene: Scene | Layout) -> Problem:
     """A bar scene as a :class:`~contactqp.Problem`: K over every node (the element
     stiffnesses along the chain), f (the nodal loads, distributed loads lumped as the chain
-    lumps them), C and g (a wall's ±1, a bar contact's +1 at node a and −1 at node b; an end
-    at a support contributes nothing, as in the chain model), the supports as prescribed dofs
-    at 0, the rows named as the scene names them.
+    lumps them), C and g (a wall's ±1, a bar contact's +1 at node a and −1 at node b: an end
+    at a support touches a prescribed dof, whose support then carries the contact's force,
+    as the scene's does), the supports as prescribed dofs at 0, the rows named as the scene
+    names them.
 
     Parameters
     ----------
@@ -36,7 +38,7 @@ def problem_from_scene(scene: Scene | Layout) -> Problem:
         Two rows of the scene that are the same constraint (two walls on one side of a node
         with the same gap).
     """
-    layout = scene if isinstance(scene, Layout) else scene.layout
+    layout = scene if isinstance(scene, Layout) else layout_of(scene)
     scene = layout.scene
     n, k = layout.n_nodes, layout.link_stiffness  # k: 0 between bars
     diagonal = np.zeros(n)
@@ -44,9 +46,7 @@ def problem_from_scene(scene: Scene | Layout) -> Problem:
     diagonal[1:] += k
     K = sp.csr_array(sp.diags_array([-k, diagonal, -k], offsets=[-1, 0, 1]))
     rows = layout.rows
-    keep = ~layout.support_mask[rows.node]
-    C = sp.csr_array((rows.coefficient[keep], (rows.row[keep], rows.node[keep])),
-                     shape=(rows.gap.size, n))
+    C = sp.csr_array((rows.coefficient, (rows.row, rows.node)), shape=(rows.gap.size, n))
     return Problem(K, np.asarray(layout.nodal_loads, dtype=float), C, rows.gap,
                    prescribed=np.sort(layout.support_nodes), names=row_names(scene),
                    units=f"{scene.unit.force}, {scene.unit.length}", name=scene.name)

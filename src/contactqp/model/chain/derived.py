@@ -1,4 +1,4 @@
-"""What is computed from a scene's :class:`~contactqp.layout.Layout` (its numbering and the
+"""What is computed from a scene's :class:`~contactqp.model.chain.layout_names.Layout` (its numbering and the
 arrays along the chain): element, link and contact forces and penetrations from the
 displacements, the displacement that forces at a few nodes cause (:func:`spread`), sets of
 nodes, the stiffness a node sees (:func:`seen_stiffness`), the scale of the loads' forces
@@ -8,13 +8,11 @@ nodes, the stiffness a node sees (:func:`seen_stiffness`), the scale of the load
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from contactqp.layout.numbering import Layout
-    from contactqp.scene import Scene
+Layout = Any  # the numbering (contactqp.model.chain.numbering.Layout), which imports this module
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
@@ -252,15 +250,16 @@ def bar_load_terms(loads: np.ndarray, running: np.ndarray, offsets: np.ndarray) 
     return np.maximum(left, np.abs(loads, out=right), out=left)
 
 
-def bar_groups(scene: Scene, rows: np.ndarray) -> np.ndarray:
+def bar_groups(layout: Layout, rows: np.ndarray) -> np.ndarray:
     """The connected groups of bars when the contact rows ``rows`` (one bool per row) join
     them: a wall joins its bar, and a support its bar, to one more vertex, the ground (last).
     One label per bar, then the ground's: a bar labelled as the ground is held in place."""
     import scipy.sparse as sp
     from scipy.sparse.csgraph import connected_components
 
+    scene = layout.scene
     bars = len(scene.bars)
-    ahead, behind = scene.layout.row_bars
+    ahead, behind = layout.row_bars
     supported = np.array([s.bar for s in scene.supports], dtype=np.intp)
     a = np.concatenate((supported, ahead[rows]))
     b = np.concatenate((np.full(supported.size, bars), behind[rows]))

@@ -12,12 +12,11 @@ tell how a force splits among them.
 from __future__ import annotations
 
 import bisect
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from contactqp.scene import Scene
+Scene = Any  # a contactqp.Scene: read here (its walls, contacts, supports), never imported
 
 
 def _offsets(scene: Scene) -> list[int]:

@@ -13,7 +13,7 @@ wall's force is the kink of w there. The same equations as the textbook loop
   a node passes a wall, the walls added are the vertices of the greatest convex minorant of
   that stretch's signed gaps against φ: the held set that makes the stretch feasible with
   forces of the right sign at once, if its ends stay where they are. The minorant is an
-  isotonic regression of the slopes, found as a lower hull (:mod:`contactqp.methods.minorant`);
+  isotonic regression of the slopes, found as a lower hull (:mod:`contactqp.methods.hull.minorant`);
   a free end clips its slopes (no force beyond the last contact);
 - the stretch is then settled within the same step: between its held nodes (old and new) u
   follows from statics alone, so where it now passes the other side's walls, that side's
@@ -37,8 +37,8 @@ import numpy as np
 
 from contactqp.methods._active_set import DECISION_RTOL, default_max_iterations
 from contactqp.methods.base import Solution
-from contactqp.methods.minorant import minorant_vertices
-from contactqp.methods.stretch import Stretch, displacements
+from contactqp.methods.hull.minorant import minorant_vertices
+from contactqp.methods.hull.segments import Stretch, displacements
 from contactqp.model import (
     Condensed,
     Model,
@@ -151,7 +151,7 @@ class WallsOnChain:
     def displacements(self, pinned: np.ndarray, nodes: np.ndarray, w_held: np.ndarray
                       ) -> np.ndarray:
         """u = u_free − w, w spread from ``w_held`` at the held ``nodes`` (the mask
-        ``pinned``): :func:`contactqp.methods.stretch.displacements`."""
+        ``pinned``): :func:`contactqp.methods.hull.segments.displacements`."""
         return displacements(self.model.layout, self.u_free, pinned, nodes, w_held)
 
     def head_load(self, nodes: np.ndarray) -> np.ndarray:

@@ -8,7 +8,7 @@ those values, sharing everything that does not depend on them (:meth:`Scene.with
 batch of cases and returns them as a :class:`Batch` of arrays, every case checked.
 
 The cases of a batch are solved and checked together where the method allows
-(:mod:`contactqp.batch`).
+(:mod:`contactqp.many.batch`).
 """
 
 from __future__ import annotations
@@ -19,18 +19,19 @@ from typing import Any
 
 import numpy as np
 
-from contactqp.batch import Batch, solve_batch, tiled_scene
+from contactqp._validate import value_array
 from contactqp.errors import OptionError, SceneError
 from contactqp.feasibility import equality_conflict
-from contactqp.held import unheld_bars
-from contactqp.layout import TOPOLOGY
-from contactqp.methods import Method, cases, complementarity
+from contactqp.many.batch import Batch, solve_batch, tiled_scene
+from contactqp.methods import Method, complementarity, load_cases
 from contactqp.model import Model, build_model, scene_model
+from contactqp.model.chain import layout_of
+from contactqp.model.chain.floating import unheld_bars
+from contactqp.model.chain.layout_names import TOPOLOGY
 from contactqp.progress import as_progress
 from contactqp.result import Result, make_result
 from contactqp.scene import MAX_ELEMENTS, Scene
 from contactqp.solve import checked_call, chosen_formulation, solve_model
-from contactqp.values import value_array
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,7 +84,7 @@ class Prepared:
             unheld = unheld_bars(scene, self.contact)
             if unheld:
                 raise SceneError(unheld)
-        model = self.model if scene is self.scene else self.model.with_layout(scene.layout)
+        model = self.model if scene is self.scene else self.model.with_layout(layout_of(scene))
         built = time.perf_counter()
         solution = solve_model(model, self.spec, self.contact, self.formulation, self.options)
         solved = time.perf_counter()
@@ -94,11 +95,11 @@ class Prepared:
     @property
     def together(self) -> bool:
         """Whether a batch's cases are solved together on the contact rows with the
-        flexibility W formed once (:mod:`contactqp.methods.cases`): Lagrange multipliers and
+        flexibility W formed once (:mod:`contactqp.methods.load_cases`): Lagrange multipliers and
         the penalty, in the full or condensed formulation (the same answer), with few contact
         rows."""
         return (self.method in ("lagrange", "penalty")
-                and self.formulation in ("full", "condensed") and cases.fits(self.model)
+                and self.formulation in ("full", "condensed") and load_cases.fits(self.model)
                 and self.options.get("active_set") != "passed")
 
     @property
@@ -123,7 +124,7 @@ class Prepared:
     def solve_many(self, loads: Any = None, gaps: Any = None, progress: Any = None) -> Batch:
         """Every case of ``loads`` (cases x :attr:`n_loads`) and ``gaps`` (cases x
         :attr:`n_gaps`), either None for the scene's own values; solved together where the
-        method allows and every case checked (:mod:`contactqp.batch`).
+        method allows and every case checked (:mod:`contactqp.many.batch`).
 
         What a batch costs (the default scene, measured on a shared 2-core machine): solved
         together (Lagrange, the penalty), about 2–3 µs and 3 kB a case from 10³ cases up
@@ -136,7 +137,7 @@ class Prepared:
         second of a run longer than a second (cases done and the time left), or a callable
         ``progress(done, total)`` (:mod:`contactqp.progress`); by default nothing is
         printed. A batch holds every case's answer, and is solved together as one scene of
-        every case's elements (:func:`contactqp.batch.tiled_scene`): cases times the
+        every case's elements (:func:`contactqp.many.batch.tiled_scene`): cases times the
         scene's elements is at most :data:`contactqp.scene.MAX_ELEMENTS`."""
         report = as_progress(progress, "solve_many")
         load_cases = None if loads is None else value_array(
@@ -173,7 +174,7 @@ class Prepared:
                 else {**self.options, "formulation": self.formulation})
 
     def tiled(self, cases: int) -> Model:
-        """The model of the scene repeated ``cases`` times (:func:`contactqp.batch.tiled_scene`),
+        """The model of the scene repeated ``cases`` times (:func:`contactqp.many.batch.tiled_scene`),
         made once per number of cases (the last one kept)."""
         kept = self._kept
         if kept.get("cases") != cases:

@@ -9,6 +9,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from contactqp.model.chain.numbering import layout_of
+
 if TYPE_CHECKING:
     from contactqp.scene import Scene
 
@@ -32,7 +34,7 @@ def unheld_bars(scene: Scene, contact: str = "inequality") -> str:
     of sets are exactly the directions in which the energy has no minimum (order-preserving
     moves are sums of such sets' moves). A bar wedged by its walls (:func:`wedged_bars`) is
     held without a load."""
-    layout = scene.layout
+    layout = layout_of(scene)
     wedged = wedged_bars(scene)  # held by their walls' want of room, on nothing else
     floating = [b for b in layout.floating_bars.tolist() if b not in wedged]
     if not floating:
@@ -85,7 +87,7 @@ def wedged_bars(scene: Scene) -> frozenset[int]:
     bar, unloaded and so undeformed, is u = that + gap at every node (two zero-gap walls:
     u = 0). Their position is forced though nothing presses them, and their walls carry no
     force (any equal pair would do as well: the least one, 0, is the answer)."""
-    layout = scene.layout
+    layout = layout_of(scene)
     floating = set(layout.floating_bars.tolist())
     if not floating:
         return frozenset()

@@ -9,25 +9,24 @@ one per bar contact, each written sign·u_node <= gap (a wall) or u_a − u_b <=
 contact), with λ >= 0 the force with which the wall (the other bar) pushes.
 
 What is computed from the numbering and these arrays (forces along the chain, seen stiffness,
-the force scales, bar grouping) is :mod:`contactqp.layout.derived`'s.
+the force scales, bar grouping) is :mod:`contactqp.model.chain.derived`'s.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
 from contactqp.feasibility import tight_cycles
-from contactqp.layout.derived import (
+from contactqp.model.chain.arrays import SolvingArrays
+from contactqp.model.chain.derived import (
     _read_only,
 )
-from contactqp.layout.solving import SolvingArrays
-
-if TYPE_CHECKING:  # a Scene makes its layout: the layout reads it, never imports it
-    from contactqp.scene import Scene
+from contactqp.scene import Scene  # the numbering reads a scene; a scene knows none
+from contactqp.scene.scene import NUMBERING
 
 
 class ContactRows(NamedTuple):
@@ -364,3 +363,15 @@ class Layout(SolvingArrays):
         """The contact rows of every one-way loop through a bar contact whose gaps add up to
         zero (:func:`contactqp.feasibility.tight_cycles`)."""
         return tight_cycles(self.scene)
+
+
+def layout_of(scene: Scene) -> Layout:
+    """The :class:`Layout` of ``scene``, made once and kept with it (a scene does not change;
+    :meth:`Scene.with_values` hands a scene with other values the numbering it shares)."""
+    layout = scene.__dict__.get("layout")
+    if layout is None:
+        layout = scene.__dict__["layout"] = Layout(scene)
+    return layout
+
+
+NUMBERING.append(layout_of)  # Scene.layout, without the scene importing the numbering

@@ -1,10 +1,10 @@
-"""What the methods and the check read from a :class:`~contactqp.layout.Layout` beyond its
+"""What the methods and the check read from a :class:`~contactqp.model.chain.layout_names.Layout` beyond its
 numbering, each made once per layout: the loads summed along the chain and their force scale,
 the press-fit forces, the compliance each row sees with the supports held, the walls of each
 side, the nodes of the outside forces, and the sets the check keeps per held set
 (:func:`contactqp.check.chain.spans.kept`). :class:`SolvingArrays` is a base of Layout; the arrays that do
 not depend on the load values or the gaps are shared by :meth:`Layout.with_values`
-(:data:`contactqp.layout.numbering.TOPOLOGY`, :data:`~contactqp.layout.numbering.SAME_GAPS`).
+(:data:`contactqp.model.chain.numbering.TOPOLOGY`, :data:`~contactqp.model.chain.numbering.SAME_GAPS`).
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-from contactqp.layout.derived import (
+from contactqp.model.chain.derived import (
     _read_only,
     largest,
     load_force_terms,

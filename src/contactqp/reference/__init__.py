@@ -17,7 +17,7 @@ Every sum is a cumulative sum in ``numpy.longdouble`` (80-bit on x86-64, eps 1.1
 platform has no extended type it is float64, and ``Reference.precision`` says so). The answer
 is certified to ``CERTIFICATE`` of the load and displacement scales.
 
-**Exact rational arithmetic** (:mod:`contactqp.reference_exact`), for every other scene.
+**Exact rational arithmetic** (:mod:`contactqp.reference.exact`), for every other scene.
 """
 
 from __future__ import annotations
@@ -25,8 +25,9 @@ from __future__ import annotations
 import numpy as np
 
 from contactqp.errors import SceneError
-from contactqp.held import unheld_bars
-from contactqp.reference_exact import Reference, rational_reference
+from contactqp.model.chain.floating import unheld_bars
+from contactqp.model.chain.numbering import layout_of
+from contactqp.reference.exact import Reference, rational_reference
 from contactqp.scene import Scene
 
 CERTIFICATE = 1e-13  # relative: the arithmetic is ~1e-19, this leaves room for n up to 1e6
@@ -101,7 +102,7 @@ def statics_reference(scene: Scene, max_steps: int | None = None,
                          f"only; it has {len(scene.bars)} bars and {len(scene.contacts)} bar "
                          "contacts (the rational reference takes them)")
     real = np.longdouble
-    layout = scene.layout
+    layout = layout_of(scene)
     k = layout.element_stiffness.astype(real)
     P = layout.nodal_loads.astype(real)
     supports = np.unique(layout.support_nodes)

@@ -1,6 +1,6 @@
 """The model of a scene: minimise ½ uᵀKu − uᵀP subject to C u (<= or =) g, over the free nodes.
 
-K is the stiffness matrix of the chain (:class:`~contactqp.model.layout.Layout`) with the
+K is the stiffness matrix of the chain (:class:`~contactqp.model.chain.layout_names.Layout`) with the
 supports taken out: tridiagonal, zero coupling between bars, kept in LAPACK's symmetric band
 storage and solved in O(n): by statics when every bar is held by one support, else by one
 banded Cholesky factorisation. With the Lagrangian L = Π + λᵀ(C u − g), λ >= 0 is the force
@@ -21,7 +21,13 @@ import scipy.sparse as sp
 
 from contactqp import linalg
 from contactqp.errors import SceneError, SolverError
-from contactqp.layout import (
+from contactqp.model.base import (
+    ContactModel,
+    ScaleTerms,
+    balanced_by_contact,
+    first_step_forces,
+)
+from contactqp.model.chain.layout_names import (
     Layout,
     contact_forces_on_nodes,
     element_forces,
@@ -29,12 +35,7 @@ from contactqp.layout import (
     link_forces,
     penetration,
 )
-from contactqp.model.base import (
-    ContactModel,
-    ScaleTerms,
-    balanced_by_contact,
-    first_step_forces,
-)
+from contactqp.model.chain.numbering import layout_of
 from contactqp.scene import Scene, row_names
 
 
@@ -335,7 +336,7 @@ def build_model(scene: Scene | Layout) -> Model:
     """
     if not isinstance(scene, (Scene, Layout)):
         raise SceneError(f"scene must be a contactqp.Scene or its Layout, got {scene!r}")
-    layout = scene if isinstance(scene, Layout) else scene.layout
+    layout = scene if isinstance(scene, Layout) else layout_of(scene)
     n = layout.n_nodes
     supports = np.sort(layout.support_nodes)
     free = np.delete(np.arange(n), supports)
@@ -376,7 +377,7 @@ def scene_model(scene: Scene) -> Model:
     twice. Its arrays are read-only, so that no caller can change what the next one reads.
     A scene with other values (:meth:`Scene.with_values`) has a layout of its own, and so a
     model of its own."""
-    layout = scene.layout
+    layout = layout_of(scene)
     model = layout.__dict__.get(_KEPT_MODEL)
     if model is None:
         model = build_model(layout)

@@ -10,8 +10,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from contactqp import linalg
-from contactqp.model.chain import Model
-from contactqp.model.condense import Condensed
+from contactqp.model.chain.condensed import Condensed
+from contactqp.model.chain.model import Model
 
 
 def elongation_rows(model: Model) -> sp.csr_array:

@@ -1,10 +1,10 @@
-"""A scene laid out as one chain of nodes (:mod:`~contactqp.layout.numbering`: the numbering
+"""A scene laid out as one chain of nodes (:mod:`~contactqp.model.chain.numbering`: the numbering
 and the arrays along the chain, :class:`Layout`) and what is computed from it
-(:mod:`~contactqp.layout.derived`: forces along the chain, seen stiffness, the force scales,
+(:mod:`~contactqp.model.chain.derived`: forces along the chain, seen stiffness, the force scales,
 bar grouping).
 """
 
-from contactqp.layout.derived import (
+from contactqp.model.chain.derived import (
     LONG_SEGMENTS,
     bar_groups,
     bar_load_terms,
@@ -24,7 +24,7 @@ from contactqp.layout.derived import (
     segment_reduce,
     spread,
 )
-from contactqp.layout.numbering import TOPOLOGY, ContactRows, Layout
+from contactqp.model.chain.numbering import TOPOLOGY, ContactRows, Layout
 
 __all__ = ["LONG_SEGMENTS", "TOPOLOGY", "ContactRows", "Layout", "bar_groups", "bar_load_terms", "contact_forces_on_nodes",
            "count_up_to", "element_forces", "in_set", "largest", "link_forces",

@@ -19,8 +19,8 @@ import scipy.sparse as sp
 
 from contactqp import linalg
 from contactqp.errors import SolverError
-from contactqp.layout import Layout, node_set, spread
-from contactqp.model.chain import Model
+from contactqp.model.chain.layout_names import Layout, node_set, spread
+from contactqp.model.chain.model import Model
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,7 +90,7 @@ class Condensed:
     def displacements(self, contact_force: np.ndarray) -> np.ndarray:
         """Free-node displacements of the full model under contact forces λ: u = K⁻¹P −
         K⁻¹Cᵀλ, the second term by statics: S Cᵀλ at the contact nodes (one banded solve),
-        spread along the chain (:func:`contactqp.model.layout.spread`: forces at the contact
+        spread along the chain (:func:`contactqp.model.chain.layout_names.spread`: forces at the contact
         nodes alone move the rest linearly in the compliance)."""
         push = self.C.T @ np.asarray(contact_force, dtype=float)
         moved = self.solve_K(push)

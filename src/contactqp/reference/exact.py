@@ -17,7 +17,7 @@ where every bar has a support, so a certified A gives the unique displacements; 
 support (held only by its contacts) can move as a whole, and then only the active sets whose
 rows hold it can be solved (the loop starts from every row, and a set that leaves such a bar
 free ends the loop: the next path takes over), and the answer is unique where the loads press
-every such bar against its contacts (:func:`contactqp.held.unheld_bars`).
+every such bar against its contacts (:func:`contactqp.model.chain.floating.unheld_bars`).
 
 On the rational path the contact rows are the edges of a graph whose vertices are the free
 nodes and GROUND (the supports): a wall joins its node to GROUND, a bar contact its two nodes.
@@ -45,6 +45,7 @@ from itertools import combinations
 import numpy as np
 
 from contactqp.errors import SceneError
+from contactqp.model.chain.numbering import layout_of
 from contactqp.scene import Scene
 
 # Exact arithmetic on a chain grows its numbers by ~53 bits per element, and a solve's cost
@@ -132,7 +133,7 @@ class _ExactScene:
 
     @classmethod
     def of(cls, scene: Scene) -> _ExactScene:
-        layout = scene.layout
+        layout = layout_of(scene)
         rows: list[list[tuple[int, int]]] = [[] for _ in range(scene.n_contacts)]
         row_ids, nodes, values, gaps = layout.rows
         for r, node, value in zip(row_ids.tolist(), nodes.tolist(), values.tolist()):
@@ -295,7 +296,7 @@ def rational_reference(scene: Scene, max_steps: int | None = None) -> Reference:
     arithmetic (module docstring). ``max_steps`` (default 2·rows + 10) bounds the textbook
     loop, and the primal loop after it; then every independent active set is tried when
     2^rows · nodes² is at most ``ENUMERATION_BUDGET``, else a SceneError."""
-    n_nodes = scene.layout.n_nodes
+    n_nodes = layout_of(scene).n_nodes
     if n_nodes > MAX_EXACT_NODES:
         raise SceneError(f"scene {scene.name!r} has {n_nodes} nodes; the exact rational "
                          f"reference takes at most {MAX_EXACT_NODES} (one bar with walls only "

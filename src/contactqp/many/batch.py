@@ -6,8 +6,8 @@ exact answer side by side, so it is checked as any scene is, by the one check
 (:mod:`contactqp.check`), in one pass over all the cases.
 
 - **Solving.** Lagrange multipliers and the penalty, with few contact rows
-  (:func:`contactqp.methods.cases.fits`), solve every case at once from one factorisation of
-  K (:mod:`contactqp.methods.cases`). Every other method, and a scene with many contact rows,
+  (:func:`contactqp.methods.load_cases.fits`), solve every case at once from one factorisation of
+  K (:mod:`contactqp.methods.load_cases`). Every other method, and a scene with many contact rows,
   is solved case by case, each case a :meth:`Prepared.solve`.
 - **Each case's verdict.** The check of the whole batch bounds the error of every force and
   displacement of every case by one number each (N and m) and gives each residual as one
@@ -28,26 +28,28 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from functools import partial
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from contactqp.check import TOLERANCES, natural_map
 from contactqp.errors import ContactqpError, SceneError, SolverError
-from contactqp.methods import cases as many
+from contactqp.methods import load_cases as many
 from contactqp.methods.base import Solution
 from contactqp.model import (
     Model,
     penetration,
 )
 from contactqp.model.base import ScaleTerms, displacement_scale, force_scale
+from contactqp.model.chain import layout_of
 from contactqp.progress import Progress
 from contactqp.result import Checked, Result, checked, make_result
 from contactqp.scene import Scene
 from contactqp.scene.scene import side_by_side
 
-if TYPE_CHECKING:
-    from contactqp.prepared import Prepared
+# a contactqp.many.prepared.Prepared: read here (its scene, model, method and options), never
+# imported, since it imports this module to solve its batches
+Prepared = Any
 
 SPARE = 0.999  # a case verified together has its residuals within this × the tolerances
 
@@ -87,7 +89,7 @@ def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
     cases x rows), each term reduced over the case's own entries; and the tiled model's own F
     and U set by the same rule from the largest of every case's terms (the rule takes maxima:
     they are the tiled model's own, bit for bit, but for λ₀, whose step is per case). A batch
-    holds no bar without a support (:func:`contactqp.methods.cases.fits`)."""
+    holds no bar without a support (:func:`contactqp.methods.load_cases.fits`)."""
     layout, walls = model.layout, len(model.scene.walls) // cases
     largest = partial(many.row_reduce, np.maximum, initial=0.0)  # each case's largest
     u0 = model.full_displacements(free_displacement.ravel())
@@ -195,7 +197,7 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
         for case in range(cases):
             _case_scene(prepared, loads, gaps, case)
         raise
-    model = tiled.with_layout(batch_scene.layout)
+    model = tiled.with_layout(layout_of(batch_scene))
     walls = len(scene.walls)
     gap_cases = per_case_rows(model.g, walls, cases)
     solved = many.solve_cases(prepared.model, prepared.contact, model.P.reshape(cases, -1),
@@ -296,7 +298,7 @@ def _checked_alone(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarra
     alone."""
     scene = _case_scene(prepared, loads, gaps, case)
     model = (prepared.model if scene is prepared.scene
-             else prepared.model.with_layout(scene.layout))
+             else prepared.model.with_layout(layout_of(scene)))
     solution = Solution(u_free, contact_force, solver, iterations, "solved with the batch",
                         info={"batch": "every case at once"})
     return make_result(model, solution, method=prepared.method, contact=prepared.contact,
