@@ -89,12 +89,19 @@ def test_every_case_verified_in_a_batch_is_right_and_verified_alone(seed, method
             continue
         assert alone.verified, context
         for name, value in alone.residuals.items():  # the batch's are at least its own, but
-            if value is not None:  # for round-off (sums over other cases: contactqp.many.batch)
+            # for round-off (sums over other cases: contactqp.many.batch). Not the error
+            # bounds: the certificate counts a row as pushing past COMPLEMENTARITY × F, and
+            # the batch's F is the largest case's, so it may read a case through other held
+            # rows and find a smaller (as sound) bound than the case alone (seeds 59252 and
+            # 180364: 2.8e-8 F against 1.3e-8 F). Both must bound the error: assert_right.
+            if value is not None and name not in ("force", "displacement"):
                 assert value <= batch.residuals[name][case] + 1e-9, (name, context)
         exact = reference(rebuilt(scene, loads[case], gaps[case]))
         assert_right(batch.u[case], batch.contact_force[case], batch.force_scale[case],
                      batch.displacement_scale[case], batch.force_error_bound[case],
                      batch.displacement_error_bound[case], exact, context)
+        assert_right(alone.u, alone.contact_force, alone.force_scale, alone.displacement_scale,
+                     alone.force_error_bound, alone.displacement_error_bound, exact, context)
 
 
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -133,14 +133,14 @@ def test_measure_reads_forces_within_the_resolution_as_zero(cylinder):
     exact = measure(model, result.contact_force)
     assert measure(model, noisy, resolution=1.5 * noise).half_width == pytest.approx(
         exact.half_width, rel=0.05)
-    with pytest.raises(ValueError, match="widen the zone"):
+    with pytest.raises(ValueError, match="widen the zone"):  # a ProblemError, a ValueError
         measure(model, noisy)
 
 
 def test_measure_refuses_a_contact_wider_than_the_zone():
     model = cylinder_on_flat(R, E, NU, approach=0.01, zone=0.15, fine=0.03)
     result = contactqp.solve(model.problem, "lagrange")
-    with pytest.raises(ValueError, match="widen the zone"):
+    with pytest.raises(ValueError, match="widen the zone"):  # a ProblemError, a ValueError
         measure(model, result.contact_force)
 
 

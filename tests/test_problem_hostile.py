@@ -541,3 +541,76 @@ def test_no_solver_prints_anything_unless_asked(capfd):
 
 def test_errors_are_contactqp_errors():
     assert issubclass(ProblemError, ContactqpError)
+
+
+# --------------------------------------------------- what the audit found after the first fix
+
+def test_an_unknown_or_missing_field_is_one_line():
+    with pytest.raises(ProblemError) as raised:
+        contactqp.Problem(K3, F3, C3, G3, stiffness=3.0)
+    one_line(raised.value, "unexpected keyword argument 'stiffness'", "its fields: K, f, C, g")
+    with pytest.raises(ProblemError) as raised:
+        contactqp.Problem(K=K3, f=F3)
+    one_line(raised.value, "missing a required argument: 'C'")
+
+
+def test_index_and_value_arrays_of_different_lengths_are_malformed():
+    K = sp.csr_array(K3)
+    K.data = np.concatenate((K.data, [5.0]))  # one value more than indices: scipy reads past
+    with pytest.raises(ProblemError) as raised:
+        contactqp.Problem(K, F3, C3, G3)
+    one_line(raised.value, "K is a malformed CSR matrix", "same length")
+
+
+def test_numbers_below_what_arithmetic_carries_are_refused():
+    with pytest.raises(ProblemError) as raised:
+        contactqp.Problem(K3, F3 * 5e-324, C3, G3 * 5e-324)
+    one_line(raised.value, "f[2] = 5e-324 is outside the range", "1e-90")
+
+
+@pytest.mark.parametrize("method", ["lagrange", "qp"])
+def test_equality_contact_on_rows_no_u_meets_names_them(method):
+    C, g = np.array([[0, 0, 1.0], [0, 0, -1.0]]), np.array([0.5, -0.2])  # 0.2 <= u <= 0.5
+    problem = contactqp.Problem(K3, F3, C, g)
+    assert contactqp.solve(problem, method).verified  # unilateral: fine
+    with pytest.raises(ProblemError) as raised:
+        contactqp.solve(problem, method, contact="equality")  # u = 0.5 and u = 0.2
+    one_line(raised.value, "rows 0 (row[0]) and 1 (row[1])", "leave no u")
+
+
+def test_a_body_its_loads_pull_off_its_rows_or_leave_unpressed_is_one_line():
+    spring = np.array([[1.0, -1.0], [-1.0, 1.0]])  # two dofs, nothing but a row holds them
+    for f, g, words in (([-1.0, 0.0], [0.5], "away from every contact row"),
+                        ([0.0, 0.0], [0.5], "its position there is not determined")):
+        for method in ("lagrange", "qp"):
+            with pytest.raises(ProblemError) as raised:
+                contactqp.solve(contactqp.Problem(spring, f, [[1.0, 0.0]], g), method)
+            one_line(raised.value, words)
+    pressed = contactqp.solve(contactqp.Problem(spring, [1.0, 0.0], [[1.0, 0.0]], [0.5]))
+    assert pressed.verified and pressed.u == pytest.approx([0.5, 0.5])
+
+
+def test_a_symmetric_matrix_market_file_in_array_format_is_read(tmp_path):
+    folder = _folder(tmp_path, K="%%MatrixMarket matrix array real symmetric\n3 3\n2\n-1\n0\n"
+                     "2\n-1\n1\n")  # the lower triangle, column by column
+    problem = contactqp.load_problem(folder, prescribed=[0])
+    assert np.array_equal(problem.K.toarray(), K3)
+
+
+def test_a_corrupt_or_garbled_bundle_is_one_line_without_internals(tmp_path):
+    path = _npz_with(tmp_path)
+    data = bytearray(path.read_bytes())
+    with zipfile.ZipFile(path) as archive:
+        offset = archive.getinfo("f.npy").header_offset + 60  # inside f's compressed data
+    data[offset: offset + 8] = b"\xff" * 8
+    np.savez_compressed(tmp_path / "z.npz", **dict(np.load(path)))  # compressed, to corrupt
+    zipped = bytearray((tmp_path / "z.npz").read_bytes())
+    with zipfile.ZipFile(tmp_path / "z.npz") as archive:
+        offset = archive.getinfo("g.npy").header_offset + 40
+    zipped[offset: offset + 16] = b"\x00\xff" * 8
+    (tmp_path / "z.npz").write_bytes(bytes(zipped))
+    with pytest.raises(ProblemError) as raised:
+        contactqp.load_problem(tmp_path / "z.npz")
+    text = one_line(raised.value, "z.npz")
+    assert "0x" not in text and "<ast" not in text
+

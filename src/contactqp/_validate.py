@@ -197,6 +197,8 @@ def value_array(name: str, values: Any, shape: tuple[int, ...], what: str,
 
 
 
+TINY = 1e-90  # a load, a gap or a coordinate may be this small (or 0): any smaller is noise,
+# and below 1e-308 arithmetic loses digits (subnormal numbers: a load and gaps of 5e-324 cycled)
 MAX_ENTRIES = 2 * 10**9  # stored entries of a matrix beyond which none of its factors fits
 SHOWN = 60  # characters of a value a message quotes at most
 
@@ -254,8 +256,8 @@ def finite_in_range(name: str, values: np.ndarray, tiny: bool,
         return
     size = np.abs(values)
     bad = ~np.isfinite(values) | (size > MAGNITUDE)
-    if not tiny:
-        bad |= (size < 1.0 / MAGNITUDE) & (values != 0.0)
+    smallest = TINY if tiny else 1.0 / MAGNITUDE
+    bad |= (size < smallest) & (values != 0.0)
     if not bad.any():
         return
     i = int(np.flatnonzero(bad)[0])
@@ -264,7 +266,7 @@ def finite_in_range(name: str, values: np.ndarray, tiny: bool,
     value = float(values.reshape(-1)[i]) if where is None else float(values[i])
     if not np.isfinite(value):
         raise error(f"{name}{at} must be finite, got {value!r} ({int(bad.sum())} such entries)")
-    sizes = f"0 or {1 / MAGNITUDE:.0e} to {MAGNITUDE:.0e}" if not tiny else f"at most {MAGNITUDE:.0e}"
+    sizes = f"0 or {smallest:.0e} to {MAGNITUDE:.0e}"
     raise error(f"{name}{at} = {value!r} is outside the range contactqp computes in ({sizes} "
                 "in size; choose other units)")
 
@@ -340,9 +342,10 @@ def compressed(name: str, indptr: Any, indices: Any, data: Any, major: int, mino
         raise error(f"{name} has {stored} stored entries, more than {MAX_ENTRIES} (no "
                     "factorisation of it fits in memory)")
     values = numbers(f"{name}.data", data, error).reshape(-1)
-    if indices.size < stored or values.size < stored:
+    if indices.size != values.size or indices.size < stored:
         raise error(f"{where}: indptr[-1] = {stored} but indices has {indices.size} and data "
-                    f"{values.size} entries")
+                    f"{values.size} entries (they must have the same length, at least "
+                    f"indptr[-1])")
     indices = indices[:stored]
     outside = np.flatnonzero((indices < 0) | (indices >= minor))
     if outside.size:

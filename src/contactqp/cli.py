@@ -32,7 +32,7 @@ from contactqp.problem_files import load_problem
 from contactqp.progress import Report
 from contactqp.report import detail_table, table
 from contactqp.result import Result
-from contactqp.scene import Scene, Units
+from contactqp.scene import Scene
 from contactqp.solve import as_scene, solve
 from contactqp.studies import (
     PenaltySweep,
@@ -93,8 +93,8 @@ def _write_charts(result: Result, sweep: PenaltySweep, out: Path,
     from contactqp import plot  # matplotlib only when charts are asked for
 
     out.mkdir(parents=True, exist_ok=True)
-    paths = [plot.save(plot.plot_bar(result), out / "bar.png"),
-             plot.save(plot.plot_penalty_sweep(sweep), out / "penalty_sweep.png")]
+    paths = [] if result.scene is None else [plot.save(plot.plot_bar(result), out / "bar.png")]
+    paths.append(plot.save(plot.plot_penalty_sweep(sweep), out / "penalty_sweep.png"))
     if default_scene:
         paths += [plot.save(plot.plot_nitsche_sweep(nitsche_sweep()), out / "nitsche_sweep.png"),
                   plot.save(plot.plot_mesh_convergence(mesh_convergence()),
@@ -102,13 +102,22 @@ def _write_charts(result: Result, sweep: PenaltySweep, out: Path,
     return paths
 
 
+def _what(target: Scene | Problem) -> str:
+    """The first line of a study: the scene and its parts, or the problem and its size."""
+    if isinstance(target, Problem):
+        units = f", {target.units}" if target.units else ""
+        return (f"problem: {target.name or 'unnamed'} ({target.n} dofs, {target.m} contact "
+                f"rows, {target.prescribed.size} prescribed{units})")
+    bars = f"{len(target.bars)} bars, " if len(target.bars) > 1 else ""
+    contacts = f", {len(target.contacts)} bar contact(s)" if target.contacts else ""
+    return (f"scene: {target.name} ({bars}{target.n_elements} elements, "
+            f"{len(target.walls)} wall(s){contacts})")
+
+
 def command_compare(args: argparse.Namespace) -> int:
     scene = _scene(args.scene)
     runs = compare(scene, progress=_progress("compare, runs"))
-    bars = f"{len(scene.bars)} bars, " if len(scene.bars) > 1 else ""
-    contacts = f", {len(scene.contacts)} bar contact(s)" if scene.contacts else ""
-    print(f"scene: {scene.name} ({bars}{scene.n_elements} elements, {len(scene.walls)} wall(s)"
-          f"{contacts})")
+    print(_what(scene))
     _print_runs(runs, getattr(args, "detail", False))
     answers = [r.result for r in runs if r.result is not None]
     shown = next((r for r in answers if r.verified and r.physical), answers[0] if answers else None)
@@ -158,11 +167,12 @@ def command_solve(args: argparse.Namespace) -> int:
     return NOT_VERIFIED
 
 
-def _sweep_header(unit: Units) -> list[tuple[str, str]]:
-    return [("ε", f"({unit.stiffness})"), ("penalty force", f"({unit.force})"),
-            ("penetration", f"({unit.length})"), ("rel. error", ""), ("verified", ""),
-            ("augmented force", f"({unit.force})"), ("rel. error", ""), ("updates", ""),
-            ("verified", "")]
+def _sweep_header(units: tuple[str, str]) -> list[tuple[str, str]]:
+    force, length = (f"({name})" if name else "" for name in units)
+    stiffness = f"({units[0]}/{units[1]})" if all(units) else ""
+    return [("ε", stiffness), ("penalty force", force), ("penetration", length),
+            ("rel. error", ""), ("verified", ""), ("augmented force", force),
+            ("rel. error", ""), ("updates", ""), ("verified", "")]
 
 
 def _sweep_row(eps: float, sweep: PenaltySweep, i: int) -> list[str]:
@@ -196,10 +206,12 @@ def command_penalty_sweep(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(sweep.to_dict(), indent=2, allow_nan=False))
         return OK
-    unit, scale = scene.unit, sweep.reference.force_scale
-    print(f"penalty sweep, {scene.name}, {args.contact} contact; Lagrange contact force "
-          f"{formatting.forces_summary(sweep.reference.contact_force, scale)} {unit.force}")
-    print(formatting.text_table(_sweep_header(unit), [
+    scale = sweep.reference.force_scale
+    force = scene.unit_names[0]
+    print(f"penalty sweep, {scene.name or 'problem'}, {args.contact} contact; Lagrange contact "
+          f"force {formatting.forces_summary(sweep.reference.contact_force, scale)} {force}"
+          .rstrip())
+    print(formatting.text_table(_sweep_header(scene.unit_names), [
         _sweep_row(eps, sweep, i) for i, eps in enumerate(sweep.penalties)]))
     for run in (*sweep.runs, *sweep.augmented_runs):
         if run.result is None:
@@ -228,9 +240,10 @@ def command_curve(args: argparse.Namespace) -> int:
         print(json.dumps(path.to_dict(), indent=2))
         return OK
     kink = first_contact_factor(scene)
-    print(f"load path, {scene.name}: displacement of node {path.load_node} "
-          f"({scene.unit.length}) against the load factor; first contact closes at "
-          f"t = {kink:.6g} (closed form)")
+    length = scene.unit_names[1]
+    print(f"load path, {scene.name or 'problem'}: displacement of {path.where}"
+          f"{f' ({length})' if length else ''} against the load factor; first contact closes "
+          f"at t = {kink:.6g} (closed form)")
     names = list(path.methods)
     print(f"{'t':>7}  " + "  ".join(f"{n:>14}" for n in names))
     for i, t in enumerate(path.load_factor):

@@ -26,10 +26,12 @@ from contactqp._validate import whole_number
 from contactqp.errors import ContactqpError, OptionError
 from contactqp.many.prepared import prepare
 from contactqp.model import Model, scene_model, wall_stiffness
+from contactqp.model.sparse import problem_model
+from contactqp.problem import Problem
 from contactqp.progress import Progress, as_progress
 from contactqp.result import Result, plain
 from contactqp.scene import MAX_ELEMENTS, Scene
-from contactqp.solve import as_scene
+from contactqp.solve import as_target
 
 # name -> (method, contact, options): unilateral contact, the textbook equality (which pulls
 # before the wall is reached), the penalty, the augmented Lagrangian and a cvxpy QP; and
@@ -48,11 +50,18 @@ MAX_STEPS = 10_000
 SOFT_PENALTY_PER_STIFFNESS = 1.0  # ε of the soft penalty, times the stiffness the walls see
 
 
-def curve_methods(scene: Scene | Model) -> dict[str, tuple[str, str, dict[str, Any]]]:
+def curve_methods(scene: Scene | Model | Any) -> dict[str, tuple[str, str, dict[str, Any]]]:
     """:data:`CURVE_METHODS` plus "soft penalty": ε = the stiffness the contacts see
-    (:func:`contactqp.model.wall_stiffness`), so that its penetration, λ/ε, is as large as
-    the displacement the contact prevents and the softer slope past the kink shows."""
-    seen = wall_stiffness(scene if isinstance(scene, Model) else scene_model(scene))
+    (:func:`contactqp.model.wall_stiffness`; a problem's: its stiffest row's,
+    c_iᵀK c_i/(c_iᵀc_i)²), so that its penetration, λ/ε, is as large as the displacement the
+    contact prevents and the softer slope past the kink shows."""
+    if isinstance(scene, Scene):
+        scene = scene_model(scene)
+    if scene.layout is None:  # a problem's model
+        stiffest = float(np.max(scene.row_stiffness, initial=0.0))
+        seen = stiffest if stiffest > 0.0 else None
+    else:
+        seen = wall_stiffness(scene)
     methods = dict(CURVE_METHODS)
     if seen is not None:
         methods["soft penalty"] = ("penalty", "inequality",
@@ -89,11 +98,23 @@ class LoadPath:
         node between two walls, which it would fix twice); empty when every method ran.
     """
 
-    scene: Scene
+    scene: Scene | Problem
     load_factor: np.ndarray
     load_node: int
     methods: dict[str, MethodPath]
     failed: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def where(self) -> str:
+        """The point the curves follow, in words: "node 2" on one bar, "bar 1 node 2" on
+        several, "dof 7" of a problem."""
+        if isinstance(self.scene, Problem):
+            return f"dof {self.load_node}"
+        if len(self.scene.bars) == 1:
+            return f"node {self.load_node}"
+        layout = self.scene.layout
+        bar = int(layout.node_bar[self.load_node])
+        return f"bar {bar} node {self.load_node - int(layout.node_offsets[bar])}"
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form of ``contactqp curve --json``."""
@@ -110,7 +131,7 @@ class LoadPath:
         }
 
 
-def first_contact_factor(scene: Scene) -> float:
+def first_contact_factor(scene: Scene | Problem) -> float:
     """The load factor at which the first contact closes under the scene's loads, from the
     contact-free answer t·K⁻¹P: min over rows with (C K⁻¹ P)ᵢ > 0 of gᵢ / (C K⁻¹ P)ᵢ
     (inf when no load closes a contact); 0 where a bar is held by contact alone: its
@@ -118,8 +139,9 @@ def first_contact_factor(scene: Scene) -> float:
 
     Parameters
     ----------
-    scene : Scene
-        The scene, at its full loads.
+    scene : Scene or Problem
+        The scene or problem, at its full loads (a problem's prescribed values scale with
+        its loads).
 
     Returns
     -------
@@ -131,29 +153,39 @@ def first_contact_factor(scene: Scene) -> float:
     SceneError
         A scene whose model cannot be built (see :func:`contactqp.build_model`).
     """
-    model = scene_model(as_scene(scene))
-    if model.floating:
-        return 0.0
-    closing = model.C @ model.free_displacement
+    target = as_target(scene)
+    if isinstance(target, Problem):
+        model = problem_model(target)
+        if model.singular:
+            return 0.0
+        closing = target.C @ model.full_displacements(model.free_displacement)
+        gaps = target.g
+    else:
+        model = scene_model(target)
+        if model.floating:
+            return 0.0
+        closing, gaps = model.C @ model.free_displacement, model.g
     reached = closing > 0.0
-    return float(np.min(model.g[reached] / closing[reached], initial=np.inf))
+    return float(np.min(gaps[reached] / closing[reached], initial=np.inf))
 
 
-def _factors(steps: Any, scene: Scene) -> np.ndarray:
+def _factors(steps: Any, scene: Scene | Problem) -> np.ndarray:
     """``steps`` load factors from 0 to 1, a number the run can finish and hold: at most
     :data:`MAX_STEPS`, and steps times the scene's elements at most :data:`MAX_ELEMENTS` (a
     method's steps are one batch, :meth:`contactqp.Prepared.solve_many`)."""
     steps = whole_number("steps", steps, 2, error=OptionError, note=" (0 and 1 included)")
-    most = min(MAX_STEPS, MAX_ELEMENTS // scene.n_elements)
+    size, what = ((scene.n, "a problem of {} dofs") if isinstance(scene, Problem)
+                  else (scene.n_elements, "a scene of {} elements"))
+    most = min(MAX_STEPS, MAX_ELEMENTS // max(size, 1))
     if steps > most:
         why = (f"contactqp steps a load path {MAX_STEPS} times at most" if most == MAX_STEPS
-               else f"a scene of {scene.n_elements} elements is stepped {most} times at most "
-                    f"({MAX_ELEMENTS} elements in all)")
+               else f"{what.format(size)} is stepped {most} times at most "
+                    f"({MAX_ELEMENTS} in all)")
         raise OptionError(f"steps = {steps}: {why}")
     return np.linspace(0.0, 1.0, steps)
 
 
-def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
+def load_path(scene: Scene | Problem | None = None, steps: int = DEFAULT_STEPS,
               methods: dict[str, tuple[str, str, dict[str, Any]]] | None = None,
               progress: Any = None) -> LoadPath:
     """The force–displacement curve of ``scene`` (default scene when None) at ``steps`` load
@@ -165,8 +197,10 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
 
     Parameters
     ----------
-    scene : Scene or None
-        The scene (None: the default scene).
+    scene : Scene, Problem, a path of either, or None
+        The scene (None: the default scene), or a problem: its loads f and prescribed values
+        are stepped together, and the curve follows the dof with the largest load (where
+        nothing loads it, its first prescribed dof).
     steps : int
         The number of load factors, 0 and 1 included (default 21).
     methods : dict, optional
@@ -189,14 +223,14 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
     SceneError
         A scene whose loads leave a bar held by contact alone unheld.
     """
-    scene = as_scene(scene)
+    scene = as_target(scene)
     factors = _factors(steps, scene)
     report = as_progress(progress, "load path")
-    model = scene_model(scene)
-    if model.floating:  # with no load nothing fixes where such a bar is: start one step in
+    model = scene_model(scene) if isinstance(scene, Scene) else problem_model(scene)
+    if model.singular:  # with no load nothing fixes where such a body is: start one step in
         factors = np.linspace(0.0, 1.0, factors.size + 1)[1:]
     methods = curve_methods(model) if methods is None else methods
-    node = model.layout.load_point()
+    node = model.layout.load_point() if isinstance(scene, Scene) else _load_dof(scene)
     paths, failed = {}, {}
     total = factors.size * len(methods)
     for i, (name, (method, contact, options)) in enumerate(methods.items()):
@@ -215,10 +249,31 @@ def load_path(scene: Scene | None = None, steps: int = DEFAULT_STEPS,
     return LoadPath(scene, factors, node, paths, failed)
 
 
-def _method_path(scene: Scene, factors: np.ndarray, node: int, method: str, contact: str,
-                 options: dict[str, Any], progress: Progress | None) -> MethodPath:
-    """One method's curve: prepared once, its steps solved as one batch."""
+def _load_dof(problem: Problem) -> int:
+    """The dof a problem's curve follows: the largest load's, else the first prescribed."""
+    if np.any(problem.f) or not problem.prescribed.size:
+        return int(np.argmax(np.abs(problem.f))) if problem.n else 0
+    return int(problem.prescribed[np.argmax(np.abs(problem.prescribed_values))])
+
+
+def _method_path(scene: Scene | Problem, factors: np.ndarray, node: int, method: str,
+                 contact: str, options: dict[str, Any], progress: Progress | None
+                 ) -> MethodPath:
+    """One method's curve: prepared once, its steps solved as one batch (a problem's step by
+    step, its loads and prescribed values scaled together, K factorised once)."""
     prepared = prepare(scene, method, contact, **options)
+    if isinstance(scene, Problem):
+        results = []
+        for k, t in enumerate(factors):
+            step = scene.with_values(f=t * scene.f, prescribed_values=t * scene.prescribed_values)
+            results.append(prepared.solve_scene(step))
+            if progress is not None:
+                progress(k + 1, factors.size)
+        return MethodPath(np.array([r.u[node] for r in results]),
+                          np.array([r.contact_force for r in results]),
+                          np.array([r.penetration for r in results]),
+                          np.array([r.verified for r in results]),
+                          np.array([r.physical for r in results]), tuple(results))
     batch = prepared.solve_many(loads=np.outer(factors, prepared.scene_loads), progress=progress)
     return MethodPath(batch.u[:, node], batch.contact_force, batch.penetration, batch.verified,
                       batch.physical, tuple(batch[step] for step in range(factors.size)))

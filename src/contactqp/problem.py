@@ -31,6 +31,9 @@ holds) is found when the model is built (:mod:`contactqp.model.sparse`). Files:
 
 from __future__ import annotations
 
+import copy
+import functools
+import inspect
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -110,6 +113,13 @@ class Problem:
         """Number of contact rows."""
         return int(self.g.size)
 
+    @property
+    def unit_names(self) -> tuple[str, str]:
+        """(force, length) from the label ``units`` = "force, length" ("" where not given), as a
+        scene's :attr:`~contactqp.scene.Scene.unit_names`."""
+        parts = [p.strip() for p in self.units.split(",")]
+        return (parts[0], parts[1]) if len(parts) == 2 else ("", "")
+
     @cached_property
     def equality(self) -> np.ndarray:
         """Per row, True where it is an equality row (read-only; worked out once, since the
@@ -120,6 +130,63 @@ class Problem:
     def __repr__(self) -> str:
         return (f"<Problem {self.name or 'unnamed'}: {self.n} dofs, {self.m} contact rows, "
                 f"{self.prescribed.size} prescribed>")
+
+    def with_values(self, f: Any = None, g: Any = None,
+                    prescribed_values: Any = None) -> Problem:
+        """This problem with other loads, gaps or prescribed values (None: its own), each
+        checked as when it is made; K, C and everything else shared (they are read-only), so
+        that its model can share this one's factorisation
+        (:meth:`contactqp.model.sparse.SparseModel.with_values`).
+
+        Parameters
+        ----------
+        f, g, prescribed_values : array, optional
+            The new loads (n), gaps (m) and prescribed values (one per prescribed dof).
+
+        Returns
+        -------
+        Problem
+            The problem with those values.
+
+        Raises
+        ------
+        ProblemError
+            A value that is not valid, or gaps that leave no u (one line naming them).
+        """
+        problem = copy.copy(self)
+        problem.__dict__.pop("_sparse_model", None)  # the model of these values is its own
+        changes = {"f": None if f is None else _validate.vector("f", f, self.n),
+                   "g": None if g is None else _validate.vector("g", g, self.m),
+                   "prescribed_values": None if prescribed_values is None else _validate.vector(
+                       "prescribed_values", prescribed_values, self.prescribed.size)}
+        for key, value in changes.items():
+            if value is not None:
+                object.__setattr__(problem, key, value)
+        if g is not None:
+            conflict = row_conflict(self.C, problem.g, self.equality, self.names)
+            if conflict:
+                raise ProblemError(conflict)
+        return problem
+
+
+def _called(init: Any) -> Any:
+    """The dataclass's __init__, with its call checked first: an unknown field or a missing one
+    is a ProblemError of one line naming it, not a TypeError."""
+    signature = inspect.signature(init)
+
+    @functools.wraps(init)
+    def checked(self: Problem, *args: Any, **kwargs: Any) -> None:
+        try:
+            signature.bind(self, *args, **kwargs)
+        except TypeError as error:
+            fields = ", ".join(name for name in signature.parameters if name != "self")
+            raise ProblemError(f"Problem: {error} (its fields: {fields})".replace(
+                "__init__() ", "")) from None
+        init(self, *args, **kwargs)
+    return checked
+
+
+Problem.__init__ = _called(Problem.__init__)  # type: ignore[method-assign]
 
 
 def symmetric_part(K: sp.csr_array) -> sp.csr_array:

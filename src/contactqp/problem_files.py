@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import os
 import zipfile
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -232,12 +233,20 @@ def _member(path: Path, archive: zipfile.ZipFile, info: zipfile.ZipInfo, key: st
                 raise ProblemError(f"{where} is truncated: {len(data)} of {needed} bytes")
     except ProblemError:
         raise
-    except (ValueError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, OSError,
-            NotImplementedError, RuntimeError) as error:
-        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
-        raise ProblemError(f"{where} cannot be read: {reason}") from None
+    except (ValueError, SyntaxError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, OSError,
+            NotImplementedError, RuntimeError, zlib.error) as error:
+        raise ProblemError(f"{where} cannot be read: {_reason(error)}") from None
     array = np.frombuffer(data, dtype=dtype, count=count)
     return array.reshape(shape, order="F" if fortran else "C").copy()
+
+
+def _reason(error: BaseException) -> str:
+    """One line of why an array could not be read, without Python's internals (numpy's header
+    parser names AST nodes by their address)."""
+    text = str(error).splitlines()[0] if str(error) else type(error).__name__
+    if " object at 0x" in text or "malformed node" in text:
+        return "its header is not a numpy array header"
+    return text
 
 
 def _extras(path: Path, data: dict[str, np.ndarray]) -> dict[str, Any]:
@@ -354,7 +363,8 @@ def _read_matrix_market(path: Path) -> Any:
     if rows > MAX_DOFS or cols > MAX_DOFS:
         raise ProblemError(f"{name} claims {rows}x{cols}: at most {MAX_DOFS} rows and columns "
                            "fit")
-    entries = size[2] if layout == "coordinate" else rows * cols
+    entries = (size[2] if layout == "coordinate" else rows * (rows + 1) // 2
+               if symmetry == "symmetric" else rows * cols)  # array: one triangle if symmetric
     body = path.stat().st_size - start
     if entries * ENTRY_BYTES[layout] > body:
         raise ProblemError(f"{name} claims {entries} entries but holds {body} bytes after its "

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -15,16 +16,34 @@ import numpy as np
 from contactqp.builders import default_scene
 from contactqp.errors import OptionError, ProblemError, SceneError, SolverError
 from contactqp.feasibility import equality_conflict
-from contactqp.feasibility.rows import conflicting_rows
+from contactqp.feasibility.rows import row_conflict
 from contactqp.methods import Method, checked_options, hull
 from contactqp.methods.base import Solution
 from contactqp.model import Condensed, Model, condensed_model, scene_model
 from contactqp.model.chain.floating import unheld_bars
 from contactqp.model.sparse import problem_model
 from contactqp.problem import Problem
+from contactqp.problem_files import load_problem
 from contactqp.result import Result, make_result
 from contactqp.scene import Scene
 from contactqp.scene_io import load_scene
+
+
+def is_problem_path(path: Any) -> bool:
+    """Whether ``path`` names a problem's files (an ``.npz`` bundle or a folder of Matrix
+    Market files), not a scene file."""
+    return bool(path) and (str(path).endswith(".npz") or Path(path).is_dir())
+
+
+def as_target(target: Scene | Problem | str | os.PathLike | None) -> Scene | Problem:
+    """What to solve: a Scene or a Problem as it is; a path, the problem (``.npz`` bundle,
+    folder of Matrix Market files) or the scene file (TOML) it names; None, the default
+    scene."""
+    if isinstance(target, Problem):
+        return target
+    if isinstance(target, (str, os.PathLike)) and is_problem_path(target):
+        return load_problem(target)
+    return as_scene(target)
 
 
 def as_scene(scene: Scene | str | os.PathLike | None) -> Scene:
@@ -107,6 +126,8 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
     SolverError
         The method could not produce an answer (a singular system, a loop that does not end).
     """
+    if isinstance(scene, (str, os.PathLike)) and is_problem_path(scene):
+        scene = load_problem(scene)
     if isinstance(scene, Problem):
         return solve_problem(scene, method, contact, formulation, options)
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
@@ -143,7 +164,7 @@ def solve_problem(problem: Problem, method: Any, contact: Any, formulation: Any,
     # not look for
     held = contact == "equality" and not problem.equality.all()
     try:
-        solution = solve_model(model, spec, _kind(model, contact), "full", options)
+        solution = solve_model(model, spec, solve_kind(model, contact), "full", options)
     except SolverError:
         if held:
             _refuse_rows_that_leave_no_u(problem)
@@ -156,7 +177,7 @@ def solve_problem(problem: Problem, method: Any, contact: Any, formulation: Any,
     return result
 
 
-def _kind(model: Any, contact: str) -> str:
+def solve_kind(model: Any, contact: str) -> str:
     """Rows that are all equalities are solved as equality contact."""
     return "equality" if model.n_contacts and model.equality.all() else contact
 
@@ -165,8 +186,8 @@ def _refuse_rows_that_leave_no_u(problem: Problem) -> None:
     """After a failed solve with every row held on its gap (``contact="equality"``), which
     the problem's own check of its rows (by their kinds) did not cover: a ProblemError naming
     rows that no u meets all at once, if there are such."""
-    conflict = conflicting_rows(problem.C, problem.g, np.ones(problem.m, dtype=bool),
-                                problem.names)
+    conflict = row_conflict(problem.C, problem.g, np.ones(problem.m, dtype=bool),
+                            problem.names)
     if conflict:
         raise ProblemError(conflict)
 
@@ -230,5 +251,6 @@ def solve_model(model: Model, spec: Method, contact: str, formulation: str,
                     solution.claimed_success, solution.info)
 
 
-__all__ = ["AUTO_CONDENSE", "AUTO_CONDENSE_NODES", "as_scene", "checked_call",
-           "chosen_formulation", "solve", "solve_model"]
+__all__ = ["AUTO_CONDENSE", "AUTO_CONDENSE_NODES", "as_scene", "as_target", "checked_call",
+           "chosen_formulation", "is_problem_path", "solve", "solve_kind", "solve_model",
+           "solve_problem"]

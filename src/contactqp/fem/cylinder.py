@@ -195,10 +195,9 @@ def measure(model: CylinderModel, contact_force: np.ndarray,
     Raises
     ------
     ProblemError
-        ``contact_force`` is not one finite number per row, or ``resolution`` is negative.
-    ValueError
-        The contact spans fewer than two rows (refine), or reaches the zone's last row (widen
-        the zone: the true contact may extend past it).
+        ``contact_force`` is not one finite number per row, or ``resolution`` is negative;
+        the contact spans fewer than two rows (refine), or reaches the zone's last row (widen
+        the zone: the true contact may extend past it). A ValueError, as before.
     """
     force = _validate.vector("contact_force", contact_force, model.x.size)
     resolution = at_least_zero("measure", "resolution", resolution)
@@ -206,10 +205,10 @@ def measure(model: CylinderModel, contact_force: np.ndarray,
     open_rows = np.flatnonzero(force <= max(PUSHING * force.max(), resolution))
     last = int(open_rows[0]) - 1 if open_rows.size else force.size - 1
     if last < 1:
-        raise ValueError(f"contact: {last + 1} row pushes; refine the mesh (fine)")
+        raise ProblemError(f"measure: {last + 1} row pushes; refine the mesh (fine)")
     if last == force.size - 1:
-        raise ValueError(f"contact: reaches the zone's last row at x = {model.x[last]:.4g}; "
-                         "widen the zone")
+        raise ProblemError(f"measure: the contact reaches the zone's last row at x = "
+                           f"{model.x[last]:.4g}; widen the zone")
     pressure = force / model.tributary
     load = 2.0 * float(force.sum())
     elastic = (model.radius, model.young, model.poisson)

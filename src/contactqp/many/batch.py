@@ -283,10 +283,11 @@ def _alone_where_flagged(prepared: Prepared, loads: np.ndarray | None, gaps: np.
 
 def _case_scene(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray | None,
                 case: int) -> Scene:
-    """Case ``case``'s scene; for bad values the error a single case gives, naming the case."""
+    """Case ``case``'s scene (or problem); for bad values the error a single case gives,
+    naming the case."""
     try:
-        return prepared.scene.with_values(None if loads is None else loads[case],
-                                          None if gaps is None else gaps[case])
+        return prepared.with_values(None if loads is None else loads[case],
+                                    None if gaps is None else gaps[case])
     except ContactqpError as error:
         raise type(error)(f"case {case}: {error}") from None
 

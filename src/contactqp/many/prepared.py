@@ -13,6 +13,7 @@ The cases of a batch are solved and checked together where the method allows
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -23,58 +24,89 @@ from contactqp._validate import value_array
 from contactqp.errors import OptionError, SceneError
 from contactqp.feasibility import equality_conflict
 from contactqp.many.batch import Batch, solve_batch, tiled_scene
-from contactqp.methods import Method, complementarity, load_cases
+from contactqp.methods import Method, checked_options, complementarity, load_cases
 from contactqp.model import Model, build_model, scene_model
 from contactqp.model.chain import layout_of
 from contactqp.model.chain.floating import unheld_bars
 from contactqp.model.chain.layout_names import TOPOLOGY
+from contactqp.model.sparse import problem_model
+from contactqp.problem import Problem
+from contactqp.problem_files import load_problem
 from contactqp.progress import as_progress
 from contactqp.result import Result, make_result
 from contactqp.scene import MAX_ELEMENTS, Scene
-from contactqp.solve import checked_call, chosen_formulation, solve_model
+from contactqp.solve import (
+    checked_call,
+    chosen_formulation,
+    is_problem_path,
+    solve_kind,
+    solve_model,
+)
 
 
 @dataclass(frozen=True, eq=False)
 class Prepared:
-    """A scene, a method and its options, prepared for many solves (module docstring).
+    """A scene or a problem, a method and its options, prepared for many solves (module
+    docstring).
 
     Attributes
     ----------
-    scene : the scene as prepared (its loads and gaps are the default values).
+    scene : the scene as prepared (its loads and gaps are the default values); None for a
+        problem.
     method, contact, options : as given to :func:`prepare` (options checked).
     formulation : the formulation every solve uses ("auto" resolved on the scene).
-    model : the scene's model, whose K, C and numbering every solve shares.
+    model : the model, whose K, C and numbering (a problem's: K's factorisation) every solve
+        shares.
+    problem : the problem as prepared (its f and g are the default values); None for a scene.
     """
 
-    scene: Scene
+    scene: Scene | None
     method: str
     contact: str
     formulation: str
     options: dict[str, Any]
-    model: Model
+    model: Any
     spec: Method = field(repr=False)
     _kept: dict[str, Any] = field(default_factory=dict, repr=False)  # made on first use
+    problem: Problem | None = None
 
     @property
     def n_loads(self) -> int:
-        """Load values a case gives: one per point load, then one per distributed load."""
+        """Load values a case gives: a scene's, one per point load, then one per distributed
+        load; a problem's, f (one per dof)."""
+        if self.problem is not None:
+            return self.problem.n
         return len(self.scene.loads) + len(self.scene.distributed)
 
     @property
     def n_gaps(self) -> int:
-        """Gaps a case gives: one per wall, then one per bar contact."""
-        return self.scene.n_contacts
+        """Gaps a case gives: a scene's, one per wall, then one per bar contact; a problem's,
+        g (one per row)."""
+        return self.problem.m if self.problem is not None else self.scene.n_contacts
+
+    @property
+    def size(self) -> int:
+        """What a case holds: a scene's elements, a problem's dofs."""
+        return self.problem.n if self.problem is not None else self.scene.n_elements
+
+    def with_values(self, loads: Any = None, gaps: Any = None) -> Scene | Problem:
+        """The scene or problem with these load values and gaps (None: its own), checked."""
+        if self.problem is not None:
+            return self.problem.with_values(f=loads, g=gaps)
+        return self.scene.with_values(loads, gaps)
 
     def solve(self, loads: Any = None, gaps: Any = None) -> Result:
-        """The checked Result of the prepared scene with these load values and gaps (None:
-        the scene's own), as :func:`contactqp.solve` gives it for that scene."""
+        """The checked Result of the prepared scene or problem with these load values and gaps
+        (None: its own), as :func:`contactqp.solve` gives it for that scene or problem."""
         start = time.perf_counter()
-        return self.solve_scene(self.scene.with_values(loads, gaps), start)
+        return self.solve_scene(self.with_values(loads, gaps), start)
 
-    def solve_scene(self, scene: Scene, start: float | None = None) -> Result:
-        """:meth:`solve` for ``scene``, made by ``self.scene.with_values`` (the same bars,
-        supports, loads and contacts; other values)."""
+    def solve_scene(self, scene: Scene | Problem, start: float | None = None) -> Result:
+        """:meth:`solve` for ``scene``, made by :meth:`with_values` (the same bars, supports,
+        loads and contacts, or the same K and C; other values)."""
         start = time.perf_counter() if start is None else start
+        if self.problem is not None:
+            return self._solve_problem(scene, start)
         if self.contact == "equality" and (scene.walls is not self.scene.walls
                                            or scene.contacts is not self.scene.contacts):
             conflict = equality_conflict(scene)
@@ -92,13 +124,25 @@ class Prepared:
                            options=self.result_options,
                            timings={"build": built - start, "solve": solved - built})
 
+    def _solve_problem(self, problem: Problem, start: float) -> Result:
+        """:meth:`solve_scene` for a problem: its model shares the prepared one's
+        factorisation (:meth:`~contactqp.model.sparse.SparseModel.with_values`)."""
+        model = self.model if problem is self.problem else self.model.with_values(problem)
+        built = time.perf_counter()
+        solution = solve_model(model, self.spec, solve_kind(model, self.contact), "full",
+                               self.options)
+        solved = time.perf_counter()
+        return make_result(model, solution, method=self.method, contact=self.contact,
+                           options=self.result_options,
+                           timings={"build": built - start, "solve": solved - built})
+
     @property
     def together(self) -> bool:
         """Whether a batch's cases are solved together on the contact rows with the
         flexibility W formed once (:mod:`contactqp.methods.load_cases`): Lagrange multipliers and
         the penalty, in the full or condensed formulation (the same answer), with few contact
-        rows."""
-        return (self.method in ("lagrange", "penalty")
+        rows; a scene's only."""
+        return (self.problem is None and self.method in ("lagrange", "penalty")
                 and self.formulation in ("full", "condensed") and load_cases.fits(self.model)
                 and self.options.get("active_set") != "passed")
 
@@ -153,17 +197,20 @@ class Prepared:
         cases = sizes.pop() if sizes else 1
         if cases == 0:
             raise OptionError("loads and gaps must have at least one case (row), got none")
-        most = MAX_ELEMENTS // self.scene.n_elements
+        most = MAX_ELEMENTS // max(self.size, 1)
         if cases > most:
-            raise OptionError(f"loads and gaps have {cases} cases of {self.scene.n_elements} "
-                              f"elements; a batch takes at most {most} ({MAX_ELEMENTS} "
-                              "elements in all): solve it in parts")
+            what = "dofs" if self.problem is not None else "elements"
+            raise OptionError(f"loads and gaps have {cases} cases of {self.size} {what}; a "
+                              f"batch takes at most {most} ({MAX_ELEMENTS} {what} in all): "
+                              "solve it in parts")
         return solve_batch(self, load_cases, gap_cases, cases, report)
 
     @property
     def scene_loads(self) -> np.ndarray:
-        """The scene's own load values: the point loads' forces, then the distributed loads'
-        intensities."""
+        """The own load values: a scene's point loads' forces, then its distributed loads'
+        intensities; a problem's f."""
+        if self.problem is not None:
+            return np.array(self.problem.f)
         return np.array([p.force for p in self.scene.loads]
                         + [q.intensity for q in self.scene.distributed], dtype=float)
 
@@ -219,12 +266,30 @@ def prepare(scene: Scene | str | None = None, method: str = "lagrange",
     SceneError
         A scene file that cannot be read or holds bad values.
     """
+    if isinstance(scene, (str, os.PathLike)) and is_problem_path(scene):
+        scene = load_problem(scene)
+    if isinstance(scene, Problem):
+        return _prepare_problem(scene, method, contact, formulation, options)
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
     model = scene_model(scene)
     for name in TOPOLOGY:  # made once here, shared by every case's layout
         getattr(model.layout, name)
     return Prepared(scene, method, contact, chosen_formulation(model, spec, formulation, contact),
                     options, model, spec)
+
+
+def _prepare_problem(problem: Problem, method: Any, contact: Any, formulation: Any,
+                     options: dict[str, Any]) -> Prepared:
+    """:func:`prepare` for a problem: its model built (and K factorised) once."""
+    spec, options = checked_options(method, contact, formulation, options)
+    if formulation != "auto":
+        raise OptionError(f"formulation={formulation!r} applies to bar scenes; a Problem "
+                          "is solved as given (formulation='auto')")
+    model = problem_model(problem)
+    refusal = spec.accepts(model, contact, options)
+    if refusal:
+        raise OptionError(refusal)
+    return Prepared(None, spec.name, contact, "full", options, model, spec, problem=problem)
 
 
 __all__ = ["Batch", "Prepared", "prepare"]

@@ -48,7 +48,7 @@ NEWTON_MAX_ITERATIONS = 100
 # (measured on the block of contactqp.fem with one row per bottom node, 2 cores shared):
 LEMKE_ROWS = 1000  # rows Lemke takes: a pivot updates a rows x 2·rows tableau (12 ms at 1000
 # rows), and its default limit of 50 + 4·rows pivots then ends within a minute
-PGS_WORK = 2 * 10**10  # sweeps x rows² PGS may take: a sweep of 2000 rows takes 5 ms
+PGS_WORK = 10**10  # sweeps x rows² PGS may take: a sweep of 2000 rows takes 5-10 ms
 NEWTON_FB_ROWS = 1000  # rows Fischer–Burmeister's Newton takes: each step a dense rows² solve
 ARMIJO = 1e-4  # sufficient decrease of ½‖Φ‖² along the Newton step
 HELD_OPEN = 1e-9  # a held row left open by more than this (of q's largest entry) is let go

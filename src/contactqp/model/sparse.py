@@ -165,6 +165,16 @@ class SparseModel(ContactModel):
         W = _gram(Y, Y * cache.pivots[cache.support, None])
         return 0.5 * (W + W.T)
 
+    def with_values(self, problem: Problem) -> SparseModel:
+        """The model of ``problem``, this one's with other loads, gaps or prescribed values
+        (:meth:`contactqp.Problem.with_values`): K's factorisation, its free modes and the
+        columns of W shared; P and g anew."""
+        P, g = _loads_and_gaps(problem, self.free)
+        model = SparseModel(problem, self.free, self.K, P, self.C, g, self.factor, self.floating,
+                            self.cache)
+        _loads_held(model)
+        return model
+
     # --- the protocol (contactqp.model.base)
     layout = None  # no chain: no bar quantities
 
@@ -175,8 +185,7 @@ class SparseModel(ContactModel):
     @property
     def units(self) -> tuple[str, str]:
         """(force, length) from the problem's label "force, length" ("" where not given)."""
-        parts = [p.strip() for p in self.problem.units.split(",")]
-        return (parts[0], parts[1]) if len(parts) == 2 else ("", "")
+        return self.problem.unit_names
 
     def set_solve(self, rows: np.ndarray, force: np.ndarray, gap: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray]:
@@ -424,12 +433,8 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseMode
     free = np.flatnonzero(~held)
     K = problem.K
     K_II = sp.csc_matrix(K[free][:, free])
-    P = problem.f[free] - (K[free][:, problem.prescribed] @ problem.prescribed_values
-                           if problem.prescribed.size else 0.0)
+    P, g = _loads_and_gaps(problem, free)
     C = sp.csr_array(problem.C[:, free])
-    g = problem.g
-    if problem.prescribed.size and problem.C[:, problem.prescribed].nnz:  # rows on a support
-        g = g - problem.C[:, problem.prescribed] @ problem.prescribed_values
     factor, cache, candidates = _factor_or_none(K_II, ordering)
     floating = None
     if factor is None:
@@ -438,7 +443,19 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseMode
             factor, cache = _plain_factor(K_II, ordering)
         else:
             _held_by_contact(problem, free, C, floating)
-    return SparseModel(problem, free, K_II, P, C, g, factor, floating, cache)
+    model = SparseModel(problem, free, K_II, P, C, g, factor, floating, cache)
+    _loads_held(model)
+    return model
+
+
+def _loads_and_gaps(problem: Problem, free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(P, g) in the free dofs: f_I − K_ID u_D, and g − C_D u_D (a row on a prescribed dof)."""
+    P = problem.f[free] - (problem.K[free][:, problem.prescribed] @ problem.prescribed_values
+                           if problem.prescribed.size else 0.0)
+    g = problem.g
+    if problem.prescribed.size and problem.C[:, problem.prescribed].nnz:  # rows on a support
+        g = g - problem.C[:, problem.prescribed] @ problem.prescribed_values
+    return P, g
 
 
 def _plain_factor(K: sp.csc_matrix, ordering: str) -> tuple[spla.SuperLU, ColumnCache]:
@@ -589,12 +606,48 @@ def _held_by_contact(problem: Problem, free: np.ndarray, C: sp.csr_array,
     count = int(np.sum(sigma > HELD * scale))
     if count == modes.shape[1]:
         return
-    mode = modes @ vt[count:][0]
+    raise ProblemError(f"nothing holds the model along a mode K leaves free and no contact row "
+                       f"touches, moving {_moving(modes @ vt[count:][0], free)}: prescribe a "
+                       "dof or add a contact row there")
+
+
+def _moving(mode: np.ndarray, free: np.ndarray) -> str:
+    """The four dofs a mode moves most, with how much (its largest entry 1)."""
     mode = mode / np.abs(mode).max()
     moving = free[np.argsort(-np.abs(mode), kind="stable")[:4]]
-    where = ", ".join(f"dof {d} ({mode[np.searchsorted(free, d)]:+.2f})" for d in moving)
-    raise ProblemError(f"nothing holds the model along a mode K leaves free and no contact row "
-                       f"touches, moving {where}: prescribe a dof or add a contact row there")
+    return ", ".join(f"dof {d} ({mode[np.searchsorted(free, d)]:+.2f})" for d in moving)
+
+
+BALANCED = 1e-9  # of the load on the free modes: what the rows may leave unbalanced
+
+
+def _loads_held(model: SparseModel) -> None:
+    """A ProblemError where the loads on the modes K leaves free X cannot be carried by the
+    rows that touch them: no λ (>= 0 on the inequality rows) with (C X)ᵀλ = XᵀP (the body is
+    pushed away from every row that could stop it: the energy has no minimum), or where
+    nothing loads a mode and only open rows touch it (nothing presses the body against a row:
+    its position is not determined)."""
+    modes = model.floating
+    if modes is None or modes.shape[1] == 0:
+        return
+    import scipy.optimize  # only for a K held by contact alone
+
+    touched = (model.C @ modes).T  # modes x rows
+    load = modes.T @ model.P
+    equality = model.equality
+    columns = np.hstack((touched, -touched[:, equality]))  # an equality row pulls too
+    _, left = scipy.optimize.nnls(columns, load)
+    size = float(np.abs(load).max(initial=0.0))
+    if left > BALANCED * max(size, 1e-300) and size > 0.0:
+        raise ProblemError(
+            f"the loads push the model along a mode K leaves free, moving "
+            f"{_moving(modes @ load, model.free)}, away from every contact row that could stop "
+            "it: the energy has no minimum (add a row on that side, or prescribe a dof)")
+    if size == 0.0 and not np.any((np.abs(touched).max(axis=0) > 0.0) & (model.g <= 0.0)):
+        raise ProblemError(
+            f"nothing loads the model along a mode K leaves free, moving "
+            f"{_moving(modes[:, 0], model.free)}, and only open rows touch it: its position "
+            "there is not determined (load it against a row, or prescribe a dof)")
 
 
 __all__ = ["ORDERING", "SparseModel", "build_sparse_model", "diagonal_pivots",

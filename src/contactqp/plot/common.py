@@ -38,6 +38,23 @@ def engineering(value: float, unit: str) -> str:
     return f"{value / 1000.0 ** power:.4g} {PREFIXES[power]}{unit}"
 
 
+def bracket(unit: str) -> str:
+    """" (N)" after an axis label, or nothing where the unit has no name (a problem's)."""
+    return f" ({unit})" if unit else ""
+
+
+def stiffness_unit(units: tuple[str, str]) -> str:
+    """The unit of a stiffness (penalty ε) from (force, length): "N/m", or "" unnamed."""
+    force, length = units
+    return f"{force}/{length}" if force and length else ""
+
+
+def target_name(result) -> str:
+    """The name of what ``result`` solved: its scene's, or its problem's (or "problem")."""
+    target = result.scene if result.scene is not None else result.problem
+    return target.name or "problem"
+
+
 def _failed_at_bottom(ax: Axes, x: np.ndarray, label: str | None) -> None:
     """A red × at the bottom edge of ``ax`` for each x: a run that has no value to draw."""
     if len(x):

@@ -11,11 +11,13 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from contactqp.curve import LoadPath
-from contactqp.model.chain import layout_of
 from contactqp.plot.common import (
     FAILED,
+    bracket,
     engineering,
+    stiffness_unit,
 )
+from contactqp.problem import Problem
 
 LINE_STYLES = {"lagrange": ("k", "-", "o"), "equality": ("tab:red", "--", "v"),
                "penalty": ("tab:green", "-.", "s"), "augmented": ("tab:cyan", ":", "D"),
@@ -31,7 +33,7 @@ def plot_load_path(path: LoadPath, kink: float | None = None) -> Figure:
     not solve the scene (:attr:`LoadPath.failed`) are named under the chart."""
     figure = Figure(figsize=(11, 7), layout="constrained")
     top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(3, 2))
-    t, unit = path.load_factor, path.scene.unit
+    t, (force, length) = path.load_factor, path.scene.unit_names
     n = len(path.methods)
     for i, (name, method) in enumerate(path.methods.items()):
         colour, dash, marker = LINE_STYLES.get(name, (f"C{i}", "-", "o"))
@@ -46,13 +48,11 @@ def plot_load_path(path: LoadPath, kink: float | None = None) -> Figure:
             ax.axvline(kink, color="0.5", linestyle=":",
                        label=f"first contact closes (closed form): t = {kink:.4g}"
                        if ax is top else None)
-    layout = layout_of(path.scene)
-    bar = int(layout.node_bar[path.load_node])
-    where = (f"node {path.load_node}" if len(path.scene.bars) == 1 else
-             f"bar {bar} node {path.load_node - int(layout.node_offsets[bar])}")
-    top.set_ylabel(f"displacement of {where} ({unit.length})")
-    bottom.set_ylabel(f"sum of contact forces ({unit.force})")
-    bottom.set_xlabel("load factor t (× every load of the scene)")
+    top.set_ylabel(f"displacement of {path.where}{bracket(length)}")
+    bottom.set_ylabel(f"sum of contact forces{bracket(force)}")
+    bottom.set_xlabel("load factor t (× every load"
+                      + (" and prescribed value)" if isinstance(path.scene, Problem)
+                         else " of the scene)"))
     # beside the panels, not in one: a curve that reaches its wall runs flat along the top
     top.legend(handles=[*top.get_legend_handles_labels()[0], *_step_legend()], fontsize=8,
                loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
@@ -60,7 +60,7 @@ def plot_load_path(path: LoadPath, kink: float | None = None) -> Figure:
         top.set_title(textwrap.fill("no curve: " + "; ".join(
             f"{name}: {why}" for name, why in path.failed.items()), 110), fontsize=8,
             color="tab:red", loc="left")
-    figure.suptitle(f"load path: {path.scene.name}")
+    figure.suptitle(f"load path: {path.scene.name or 'problem'}")
     return figure
 
 
@@ -74,8 +74,7 @@ def _describe(name: str, method) -> str:
     if name in CURVE_NAMES:
         return CURVE_NAMES[name]
     if first.method == "penalty" and "penalty" in first.options:
-        unit = first.scene.unit.stiffness
-        return f"penalty, ε = {engineering(first.options['penalty'], unit)}"
+        return f"penalty, ε = {engineering(first.options['penalty'], stiffness_unit(first.model.units))}"
     return first.label
 
 

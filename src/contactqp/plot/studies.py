@@ -15,7 +15,10 @@ from contactqp.plot.common import (
     FLOOR,
     _axes,
     _failed_at_bottom,
+    bracket,
     engineering,
+    stiffness_unit,
+    target_name,
 )
 from contactqp.studies import MeshConvergence, NitscheSweep, PenaltySweep, Run
 
@@ -57,7 +60,8 @@ def plot_penalty_sweep(sweep: PenaltySweep) -> Figure:
     left = figure.add_subplot(grid[:, 0])
     right = figure.add_subplot(grid[0, 1])
     updates = figure.add_subplot(grid[1, 1], sharex=right)
-    eps, unit = sweep.penalties, sweep.reference.scene.unit
+    eps, (_, length) = sweep.penalties, sweep.reference.model.units
+    stiffness = stiffness_unit(sweep.reference.model.units)
     for ax in (left, right):  # set first: a panel may have nothing to draw but the ε marks
         ax.set(xscale="log", yscale="log", xlim=(eps.min() / 3, eps.max() * 3))
     _run_marks(left, eps, sweep.penetration, sweep.runs, "tab:blue", "--", "penalty",
@@ -66,13 +70,15 @@ def plot_penalty_sweep(sweep: PenaltySweep) -> Figure:
     _run_marks(right, eps, sweep.augmented_error, sweep.augmented_runs, "tab:orange", "-",
                "augmented Lagrangian")
     _draw_updates(updates, eps, sweep)
-    textbook = TEXTBOOK_PENALTY * unit.metre
-    for ax in (left, right, updates):
-        ax.axvline(textbook, color="tab:green", linestyle=":", linewidth=1.5,
-                   label=f"textbook ε = {textbook:.0e} {unit.stiffness}" if ax is left else None)
+    scene = sweep.reference.scene
+    if scene is not None:  # the textbook ε is a number in N/m: a problem has no such number
+        textbook = TEXTBOOK_PENALTY * scene.unit.metre
+        for ax in (left, right, updates):
+            ax.axvline(textbook, color="tab:green", linestyle=":", linewidth=1.5,
+                       label=f"textbook ε = {textbook:.0e} {stiffness}" if ax is left else None)
     _mark_round_off(right, sweep)
-    left.set(xlabel=f"penalty ε ({unit.stiffness})",
-             ylabel=f"largest penetration ({unit.length})",
+    left.set(xlabel=f"penalty ε{bracket(stiffness)}",
+             ylabel=f"largest penetration{bracket(length)}",
              title="penalty method: penetration ≈ contact force / ε")
     right.set(ylabel="relative contact-force error",
               title="contact-force error against Lagrange multipliers")
@@ -82,7 +88,7 @@ def plot_penalty_sweep(sweep: PenaltySweep) -> Figure:
     capped = [h for h in updates.get_legend_handles_labels()[0] if len(h.get_xdata())]
     left.legend(handles=[*handles, *_study_legend_extras(), *capped], fontsize=8,
                 loc="lower left")
-    figure.suptitle(f"{sweep.reference.scene.name}: the penalty method and the augmented "
+    figure.suptitle(f"{target_name(sweep.reference)}: the penalty method and the augmented "
                     f"Lagrangian over ε, {sweep.reference.contact} contact")
     return figure
 
@@ -101,7 +107,7 @@ def _draw_updates(ax: Axes, eps: np.ndarray, sweep: PenaltySweep) -> None:
             for r in runs if r.result is not None}
     for cap in caps:
         ax.axhline(cap, color="tab:red", linewidth=0.8, linestyle="--")
-    ax.set(xlabel=f"penalty ε ({sweep.reference.scene.unit.stiffness})",
+    ax.set(xlabel=f"penalty ε{bracket(stiffness_unit(sweep.reference.model.units))}",
            ylabel="augmented: updates", ylim=(0, 1.15 * max(caps | {1})))
 
 

@@ -130,6 +130,12 @@ class Scene:
         return UNIT_SYSTEMS[self.units]
 
     @property
+    def unit_names(self) -> tuple[str, str]:
+        """(force, length): the names of the scene's force and length units, as a problem's
+        :attr:`~contactqp.problem.Problem.unit_names`."""
+        return self.unit.force, self.unit.length
+
+    @property
     def n_contacts(self) -> int:
         """Contact rows: one per wall, then one per bar contact."""
         return len(self.walls) + len(self.contacts)

@@ -8,16 +8,17 @@ from typing import Any
 
 import numpy as np
 
-from contactqp.errors import ContactqpError, SceneError
+from contactqp.errors import ContactqpError, ProblemError, SceneError
 from contactqp.methods import CONTACT_KINDS
 from contactqp.methods.penalty import TEXTBOOK_PENALTY
 from contactqp.methods.qp import available_qp_solvers
 from contactqp.model import contact_forces_on_nodes, largest
+from contactqp.problem import Problem
 from contactqp.progress import as_progress, counter
 from contactqp.reference import reference
 from contactqp.result import Result
 from contactqp.scene import Scene
-from contactqp.solve import as_scene, solve
+from contactqp.solve import as_target, solve
 
 ROUND_OFF = 1e-12  # relative: a force error (of the force) or a force (of F) below it is round-off
 # A study keeps every run's Result: at 10⁶ elements compare took 5.2 GB and 53 s, the penalty
@@ -26,9 +27,15 @@ ROUND_OFF = 1e-12  # relative: a force error (of the force) or a force (of F) be
 MAX_STUDY_ELEMENTS = 1_000_000
 
 
-def study_size(scene: Scene, study: str) -> Scene:
-    """``scene`` if ``study`` can hold its answers (:data:`MAX_STUDY_ELEMENTS`), else a
-    SceneError, before anything is solved."""
+def study_size(scene: Scene | Problem, study: str) -> Scene | Problem:
+    """``scene`` if ``study`` can hold its answers (:data:`MAX_STUDY_ELEMENTS` elements, or a
+    problem's dofs), else a SceneError, before anything is solved."""
+    if isinstance(scene, Problem):
+        if scene.n > MAX_STUDY_ELEMENTS:
+            raise ProblemError(f"the problem has {scene.n} dofs; {study} keeps every run's "
+                               f"answer in memory and takes at most {MAX_STUDY_ELEMENTS}: "
+                               "solve it by one method (contactqp solve)")
+        return scene
     if scene.n_elements > MAX_STUDY_ELEMENTS:
         raise SceneError(f"bar: the scene has {scene.n_elements} elements; {study} keeps every "
                          f"run's answer in memory and takes at most {MAX_STUDY_ELEMENTS}: solve "
@@ -69,20 +76,25 @@ class Run:
         or a reference."""
         if self.result is None or self.exact_force is None:
             return None
-        return largest(contact_forces_on_nodes(self.result.layout,
-                                               self.result.contact_force - self.exact_force))
+        difference = self.result.contact_force - self.exact_force
+        if self.result.layout is None:
+            return largest(difference)
+        return largest(contact_forces_on_nodes(self.result.layout, difference))
 
 
-def method_runs(scene: Scene | None = None) -> list[tuple[str, dict]]:
+def method_runs(scene: Scene | Problem | None = None) -> list[tuple[str, dict]]:
     """(method, options) of every run in a comparison, one per installed solver; the penalty
-    at its default ε and at the textbook's 1e14 N/m (in the scene's units)."""
-    metre = 1.0 if scene is None else scene.unit.metre
-    runs: list[tuple[str, dict]] = [("lagrange", {}), ("penalty", {}),
-                                    ("penalty", {"penalty": TEXTBOOK_PENALTY * metre}),
-                                    ("augmented", {}), ("lemke", {}), ("pgs", {}),
-                                    ("pgs", {"relaxation": 1.5}), ("semismooth_newton", {}),
-                                    ("semismooth_newton", {"ncp": "fischer-burmeister"}),
-                                    ("nitsche", {})]
+    at its default ε and, on a scene, at the textbook's 1e14 N/m (in the scene's units) and
+    Nitsche's method (a problem's matrices carry no traction for it)."""
+    problem = isinstance(scene, Problem)
+    metre = 1.0 if scene is None or problem else scene.unit.metre
+    runs: list[tuple[str, dict]] = [("lagrange", {}), ("penalty", {})]
+    if not problem:
+        runs.append(("penalty", {"penalty": TEXTBOOK_PENALTY * metre}))
+    runs += [("augmented", {}), ("lemke", {}), ("pgs", {}), ("pgs", {"relaxation": 1.5}),
+             ("semismooth_newton", {}), ("semismooth_newton", {"ncp": "fischer-burmeister"})]
+    if not problem:
+        runs.append(("nitsche", {}))
     for info in available_qp_solvers():
         if info.available:
             runs.append(("qp", {"backend": info.backend, "solver": info.solver}))
@@ -104,17 +116,20 @@ def run_label(method: str, options: dict) -> str:
     return "/".join([method, *(str(v) for v in options.values() if v)])
 
 
-def exact_reference(scene: Scene) -> np.ndarray | None:
+def exact_reference(scene: Scene | Problem) -> np.ndarray | None:
     """The exact unilateral contact forces of ``scene`` (:func:`contactqp.reference.reference`,
     N, one per contact row), or None for a scene beyond its reach (more than
-    ``MAX_EXACT_NODES`` nodes unless it is one bar with walls only)."""
+    ``MAX_EXACT_NODES`` nodes unless it is one bar with walls only) and for a problem (whose
+    answers each carry their own distance to the exact one)."""
+    if isinstance(scene, Problem):
+        return None
     try:
         return reference(scene).contact_force
     except SceneError:
         return None
 
 
-def compare(scene: Scene | str | None = None,
+def compare(scene: Scene | Problem | str | None = None,
             contacts: tuple[str, ...] = CONTACT_KINDS, progress: Any = None) -> list[Run]:
     """Solve ``scene`` (a Scene, a scene file's path, or None for the default scene) by every
     method and every installed QP solver, for each contact kind; the inequality runs carry the
@@ -123,8 +138,9 @@ def compare(scene: Scene | str | None = None,
 
     Parameters
     ----------
-    scene : Scene, str, os.PathLike or None
-        The scene, the path of a scene file, or None for the default scene.
+    scene : Scene, Problem, str, os.PathLike or None
+        The scene or the problem, the path of a scene file or of a problem's files (an
+        ``.npz`` bundle, a folder of Matrix Market files), or None for the default scene.
     contacts : tuple of str
         The contact kinds to run, ``("inequality", "equality")`` by default.
     progress : bool or callable, optional
@@ -144,7 +160,7 @@ def compare(scene: Scene | str | None = None,
         A scene file that cannot be read or holds bad values, or more than
         :data:`MAX_STUDY_ELEMENTS` elements.
     """
-    scene = study_size(as_scene(scene), "compare")
+    scene = study_size(as_target(scene), "compare")
     report = as_progress(progress, "compare")
     exact = exact_reference(scene) if "inequality" in contacts else None
     runs = method_runs(scene)

@@ -13,19 +13,33 @@ from contactqp._validate import positive_values
 from contactqp.builders import default_scene
 from contactqp.errors import ContactqpError, OptionError
 from contactqp.model import largest
+from contactqp.model.sparse import problem_model
+from contactqp.problem import Problem
 from contactqp.progress import as_progress, counter
 from contactqp.result import Result, plain
 from contactqp.scene import Load, Scene
-from contactqp.solve import as_scene, solve
+from contactqp.solve import as_scene, as_target, solve
 from contactqp.studies.comparison import ROUND_OFF, Run, study_size
 
 SWEEP_PENALTIES = (1.0,) + tuple(10.0 ** k for k in range(5, 21))  # N/m: 1, 1e5, 1e6 … 1e20
 
 
-def sweep_penalties(scene: Scene) -> tuple[float, ...]:
+PROBLEM_SWEEP = tuple(10.0 ** k for k in range(-6, 15))  # of a problem's stiffest row
+
+
+def sweep_penalties(scene: Scene | Problem) -> tuple[float, ...]:
     """:data:`SWEEP_PENALTIES` (N/m) in the scene's units (force per length): the same
-    physical sweep in every unit system."""
+    physical sweep in every unit system. A problem's (whose units are the user's):
+    :data:`PROBLEM_SWEEP` times the stiffness its stiffest row sees, c_iᵀK c_i/(c_iᵀc_i)²."""
+    if isinstance(scene, Problem):
+        stiffest = float(np.max(problem_model(scene).row_stiffness, initial=0.0)) or 1.0
+        return tuple(float(eps * stiffest) for eps in PROBLEM_SWEEP)
     return tuple(eps * scene.unit.metre for eps in SWEEP_PENALTIES)
+
+
+def _stiffness_unit(result: Result) -> str:
+    force, length = result.model.units
+    return f"{force}/{length}" if force and length else ""
 
 
 @dataclass(frozen=True)
@@ -88,7 +102,9 @@ class PenaltySweep:
             return [r.result is not None and r.result.verified for r in runs]
 
         return plain({
-            "penalty": self.penalties, "units": self.reference.scene.units,
+            "penalty": self.penalties,
+            "units": (self.reference.scene.units if self.reference.scene is not None
+                      else self.reference.problem.units),
             "contact_force": of(self.runs, "contact_force"),
             "penetration": of(self.runs, "penetration"),
             "force_error": self.force_error,
@@ -117,7 +133,7 @@ class PenaltySweep:
         return f"penalty: {self._penalty_summary()}\n{self._augmented_summary()}"
 
     def _penalty_summary(self) -> str:
-        unit = self.reference.scene.unit.stiffness
+        unit = _stiffness_unit(self.reference)
         if np.nanmax(self.force_error) <= ROUND_OFF:  # exact throughout: nothing converges
             return (f"every ε gives the Lagrange force (force error at most "
                     f"{np.nanmax(self.force_error):.1e})")
@@ -135,7 +151,7 @@ class PenaltySweep:
     def _augmented_summary(self) -> str:
         verified = np.array([r.result is not None and r.result.verified
                              for r in self.augmented_runs], dtype=bool)
-        unit = self.reference.scene.unit.stiffness
+        unit = _stiffness_unit(self.reference)
         text = "augmented Lagrangian: "
         if verified.all():
             text += "verified at every ε"
@@ -183,7 +199,8 @@ def _sweep_runs(scene: Scene, method: str, penalties: tuple[float, ...], contact
     return tuple(runs), np.array(errors)
 
 
-def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | None = None,
+def penalty_sweep(scene: Scene | Problem | None = None,
+                  penalties: tuple[float, ...] | None = None,
                   contact: str = "inequality", progress: Any = None) -> PenaltySweep:
     """Penetration and contact force of the penalty method (and of the augmented Lagrangian
     method with the same ε) for each ε in ``penalties`` (force per length in the scene's
@@ -191,10 +208,11 @@ def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | Non
 
     Parameters
     ----------
-    scene : Scene or None
-        The scene (None: the default scene).
+    scene : Scene, Problem, a path of either, or None
+        The scene or the problem (None: the default scene).
     penalties : tuple of float, optional
-        The values of ε, force per length in the scene's units.
+        The values of ε, force per length in the scene's or problem's units (default
+        :func:`sweep_penalties`).
     contact : str
         ``"inequality"`` (default) or ``"equality"``.
     progress : bool or callable, optional
@@ -216,7 +234,7 @@ def penalty_sweep(scene: Scene | None = None, penalties: tuple[float, ...] | Non
     SolverError
         The Lagrange solution the sweep compares with cannot be computed.
     """
-    scene = study_size(as_scene(scene), "the penalty sweep")
+    scene = study_size(as_target(scene), "the penalty sweep")
     penalties = sweep_penalties(scene) if penalties is None else positive_values(
         "penalties", penalties, "ε, force per length", OptionError)
     advance = counter(as_progress(progress, "penalty sweep"), 2 * len(penalties))

@@ -201,8 +201,7 @@ class Model(ContactModel):
 
     @property
     def units(self) -> tuple[str, str]:
-        unit = self.scene.unit
-        return unit.force, unit.length
+        return self.scene.unit_names
 
     @property
     def singular(self) -> bool:
