@@ -340,12 +340,12 @@ def test_studies_exit_0_with_failing_rows_and_say_so(capsys):
 
 
 def test_an_unexpected_error_is_one_line_and_exit_3(capsys, monkeypatch):
-    from contactqp import cli
+    from contactqp import cli_commands
 
     def broken(*args, **kwargs):
         raise ZeroDivisionError("float division by zero")
 
-    monkeypatch.setattr(cli, "solve", broken)
+    monkeypatch.setattr(cli_commands, "solve", broken)
     code = main(["solve"])
     _, err = capsys.readouterr()
     assert code == 3 and len(err.strip().splitlines()) == 1
@@ -492,13 +492,13 @@ def test_an_out_that_cannot_take_the_charts_is_refused_before_anything_runs(
         capsys, monkeypatch, tmp_path, out, words, command):
     """--out at a file or a place that cannot be written: exit 2 and one line naming it,
     before the comparison (or any solve) runs; it was exit 3 after the whole comparison."""
-    from contactqp import cli
+    from contactqp import cli_commands
 
     def never(*args, **kwargs):
         raise AssertionError("ran before --out was checked")
 
     for name in ("compare", "penalty_sweep", "solve", "as_scene"):
-        monkeypatch.setattr(cli, name, never)
+        monkeypatch.setattr(cli_commands, name, never)
     file = tmp_path / "a_file"
     file.write_text("")
     code, printed, err = run(capsys, *command, "--out", out.replace("{file}", str(file)))
@@ -556,9 +556,9 @@ def test_penalty_sweep_contact_option(capsys):
 def test_a_long_run_shows_its_progress_on_stderr(capsys, monkeypatch, argv):
     """Past PROGRESS_AFTER seconds (here 0, so that no test waits) a run says on stderr how
     far it is, and ends with "done"; the table on stdout is unchanged."""
-    from contactqp import cli
+    from contactqp import cli_commands
 
-    monkeypatch.setattr(cli, "PROGRESS_AFTER", 0.0)
+    monkeypatch.setattr(cli_commands, "PROGRESS_AFTER", 0.0)
     code, out, err = run(capsys, *argv, "--no-charts")
     assert code == 0 and out
     lines = err.splitlines()

@@ -33,7 +33,7 @@ def negative_numbers_joined(argv: list[str], options: tuple[str, ...]) -> list[s
     return joined
 
 
-def check_out_folder(folder: Path) -> None:
+def validate_out_folder(folder: Path) -> None:
     """An OptionError unless the charts can be written into ``folder`` (made with its missing
     parents if need be): a file of that name or on its way, or a place that cannot be
     written. The folders made to try are removed again, so that a run refused for bad input
@@ -58,7 +58,7 @@ def check_out_folder(folder: Path) -> None:
                 pass
 
 
-__all__ = ["chatter_to_stderr", "check_out_folder", "negative_numbers_joined"]
+__all__ = ["chatter_to_stderr", "negative_numbers_joined", "validate_out_folder"]
 
 
 @contextlib.contextmanager

@@ -4,7 +4,7 @@ A method is a function ``(model, contact, **options) -> Solution``: ``model`` an
 protocol (:mod:`contactqp.model.base`: a bar scene's chain, its condensed chain, or a user's
 sparse model; a method takes a chain's fast path where ``model.layout`` says it is one),
 ``contact`` "inequality" or "equality". :data:`METHODS`, the one registry, names each
-method's options, with the check each value must pass, the formulations it solves and the
+method's options, with the validation each value must pass, the formulations it solves and the
 models it accepts; :func:`checked_options` applies them, so that the methods themselves take
 their options as given. The pipeline that builds the model and checks the answer is
 :mod:`contactqp.solve`.
@@ -36,24 +36,24 @@ CONTACT_KINDS = ("inequality", "equality")  # the contact rows as C u <= g, or a
 FORMULATIONS = ("full", "condensed", "strain")
 
 
-def _or_none(check: Callable[[Any], Any]) -> Callable[[Any], Any]:
-    return lambda value: None if value is None else check(value)
+def _or_none(validate: Callable[[Any], Any]) -> Callable[[Any], Any]:
+    return lambda value: None if value is None else validate(value)
 
 
 def _choice(name: str, choices: tuple[str, ...]) -> Callable[[Any], str]:
-    def check(value: Any) -> str:
+    def validate(value: Any) -> str:
         if not isinstance(value, str) or value not in choices:
             raise OptionError(f"{name} must be one of {', '.join(choices)}; got {value!r}")
         return value
-    return check
+    return validate
 
 
 def _text(name: str) -> Callable[[Any], str]:
-    def check(value: Any) -> str:
+    def validate(value: Any) -> str:
         if not isinstance(value, str):
             raise OptionError(f"{name} must be a name (text), got {value!r}")
         return value
-    return check
+    return validate
 
 
 # The most max_iterations may ask for, per kind of step, so that no request runs unbounded:
@@ -65,12 +65,12 @@ MOST_PASSES = 10**6
 
 
 def _iterations(most: int, unit: str) -> Callable[[Any], int]:
-    def check(value: Any) -> int:
+    def validate(value: Any) -> int:
         count = whole_number("max_iterations", value, 1, error=OptionError)
         if count > most:
             raise OptionError(f"max_iterations must be at most {most} ({unit}), got {count}")
         return count
-    return check
+    return validate
 
 
 ITERATIONS = _or_none(_iterations(MOST_STEPS, "set solves"))
@@ -136,7 +136,7 @@ def _chains_only(model: Any, contact: str, options: dict[str, Any]) -> str | Non
 
 @dataclass(frozen=True)
 class Method:
-    """A method: its name, its function, its options (name -> the check its value must pass,
+    """A method: its name, its function, its options (name -> the validation its value must pass,
     returning the value to use), the formulations it solves, one line on what it does, and
     what models it accepts (``accepts(model, contact, options)``: None, or the one line that
     says why not)."""

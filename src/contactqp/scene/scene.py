@@ -27,12 +27,12 @@ from contactqp.scene.parts import (
     Wall,
 )
 from contactqp.scene.validation import (
-    _check_contacts,
-    _check_loads,
-    _check_supports,
-    _check_walls,
     _numbering,
-    check_wall_fields,
+    _validate_contacts,
+    _validate_loads,
+    _validate_supports,
+    _validate_walls,
+    validate_wall_fields,
 )
 from contactqp.scene.walls import ReadAsItems, Walls
 from contactqp.units import UNIT_SYSTEMS, Units
@@ -106,10 +106,10 @@ class Scene:
             raise SceneError(f"bar: {total} elements in all; contactqp takes at most "
                              f"{MAX_ELEMENTS} in a scene")
         node = _numbering(self.bars)
-        held = _check_supports(self, node)
-        _check_loads(self, node)
-        walls = _check_walls(self, node, held)
-        _check_contacts(self, node, held, walls)
+        held = _validate_supports(self, node)
+        _validate_loads(self, node)
+        walls = _validate_walls(self, node, held)
+        _validate_contacts(self, node, held, walls)
         conflict = _conflict(self)
         if conflict:
             raise SceneError(conflict)
@@ -347,7 +347,7 @@ def _wall_items(values: Any) -> tuple[Wall, ...] | Walls:
             if not isinstance(value, (Wall, Walls)):
                 raise SceneError(f"wall[{i}] must be a contactqp.Wall or Walls, got {value!r}")
             if isinstance(value, Wall):
-                check_wall_fields(f"wall[{rows}]", value)
+                validate_wall_fields(f"wall[{rows}]", value)
             rows += len(value) if isinstance(value, Walls) else 1
         return Walls.of(values)
     return _items(values, Wall, "wall")

@@ -12,7 +12,7 @@ import numpy as np
 from contactqp._validate import MAGNITUDE, number, whole_number
 from contactqp.errors import SceneError
 from contactqp.scene.parts import WALL_SIDES, Bar, Wall
-from contactqp.scene.walls import Walls, check_wall_set
+from contactqp.scene.walls import Walls, validate_wall_set
 
 Scene = Any  # the Scene being built (contactqp.scene.scene), which imports this module
 
@@ -36,7 +36,7 @@ def _numbering(bars: tuple[Bar, ...]):
     return node
 
 
-def _check_supports(scene: Scene, node) -> dict[int, int]:
+def _validate_supports(scene: Scene, node) -> dict[int, int]:
     """No node held twice, not every node held, and something to hold a bar that has no
     support (a wall or a bar contact: whether its loads press it against one is decided with
     the contact kind, :func:`contactqp.model.chain.floating.unheld_bars`): {node: support index}."""
@@ -59,7 +59,7 @@ def _check_supports(scene: Scene, node) -> dict[int, int]:
     return held
 
 
-def _check_loads(scene: Scene, node) -> None:
+def _validate_loads(scene: Scene, node) -> None:
     """Point loads on nodes, distributed loads on elements of a bar, all finite numbers."""
     for i, load in enumerate(scene.loads):
         node(f"load[{i}]", load.bar, load.node)
@@ -79,7 +79,7 @@ def _check_loads(scene: Scene, node) -> None:
                              f"must satisfy 0 <= start < stop <= {n_elements}")
 
 
-def check_wall_fields(name: str, wall: Wall) -> None:
+def validate_wall_fields(name: str, wall: Wall) -> None:
     """A Wall's own fields (those that need no scene): a gap that is a finite number, a side
     '+' or '-', whole numbers for its node and bar."""
     whole_number(f"{name}.bar", wall.bar, 0, "bar number")
@@ -89,11 +89,11 @@ def check_wall_fields(name: str, wall: Wall) -> None:
         raise SceneError(f"{name}.side must be '+' or '-', got {wall.side!r}")
 
 
-def _check_walls(scene: Scene, node, held: dict[int, int]) -> dict[tuple[int, str], int]:
+def _validate_walls(scene: Scene, node, held: dict[int, int]) -> dict[tuple[int, str], int]:
     """Walls on free nodes, one per side of a node: {(node, side): wall index} (for a
     :class:`Walls`, checked in numpy passes, and made only for a scene with bar contacts)."""
     if isinstance(scene.walls, Walls):
-        return _check_wall_set(scene, scene.walls, held)
+        return _validate_wall_set(scene, scene.walls, held)
     checked = _plain_walls(scene, held)
     if checked is not None:
         return checked
@@ -126,25 +126,25 @@ def _plain_walls(scene: Scene, held: dict[int, int]) -> dict[tuple[int, str], in
     if not (np.abs(columns.gaps) <= MAGNITUDE).all():  # also False for NaN
         return None
     try:
-        return _check_wall_set(scene, columns, held)
+        return _validate_wall_set(scene, columns, held)
     except SceneError:
         return None
 
 
-def _check_wall_set(scene: Scene, walls: Walls,
+def _validate_wall_set(scene: Scene, walls: Walls,
                     held: dict[int, int]) -> dict[tuple[int, str], int]:
-    """:func:`check_wall_set` of the scene's walls as a :class:`Walls`; {(node, side): wall
+    """:func:`validate_wall_set` of the scene's walls as a :class:`Walls`; {(node, side): wall
     index} only where bar contacts need it."""
     counts = np.array([b.n_nodes for b in scene.bars], dtype=np.intp)
     offsets = np.concatenate(([0], np.cumsum(counts)[:-1]))
-    check_wall_set(walls, counts, offsets, held)
+    validate_wall_set(walls, counts, offsets, held)
     if not scene.contacts:
         return {}
     at = (offsets[walls.bars] + walls.nodes).tolist()
     return {(a, side): i for i, (a, side) in enumerate(zip(at, walls.sides.tolist()))}
 
 
-def _check_contacts(scene: Scene, node, held: dict[int, int],
+def _validate_contacts(scene: Scene, node, held: dict[int, int],
                     walls: dict[tuple[int, str], int]) -> None:
     """Contacts between two nodes, not both held, none repeating another or a wall."""
     pairs: dict[tuple[int, int], int] = {}

@@ -2,7 +2,7 @@
 which a scene and its layout read as arrays, with no Python object per wall; it still reads as
 a sequence of :class:`~contactqp.scene.parts.Wall` (made on first use) wherever one is iterated.
 
-:func:`check_wall_set` is the scene's check of such a set together with the bars and supports
+:func:`validate_wall_set` is the scene's check of such a set together with the bars and supports
 (nodes that exist, none at a support, one wall per node and side), in numpy passes, with the
 same one-line messages as the check of Wall objects (contactqp.scene.validation).
 """
@@ -164,7 +164,7 @@ class Walls(ReadAsItems):
     @classmethod
     def of(cls, walls: Any) -> Walls:
         """One set of ``walls`` in order: :class:`Walls` and Wall objects (whose fields are
-        checked already, contactqp.scene.validation.check_wall_fields), each run of Wall
+        checked already, contactqp.scene.validation.validate_wall_fields), each run of Wall
         objects read column by column."""
         if isinstance(walls, Walls):  # not iterated: that would make its Wall objects
             return walls
@@ -248,7 +248,7 @@ class Walls(ReadAsItems):
         return f"Walls({len(self)} walls)"
 
 
-def check_wall_set(walls: Walls, node_counts: np.ndarray, offsets: np.ndarray,
+def validate_wall_set(walls: Walls, node_counts: np.ndarray, offsets: np.ndarray,
                    held: dict[int, int]) -> None:
     """The scene's checks of a :class:`Walls` (as contactqp.scene.validation's of Wall
     objects, with its messages): every bar and node exists, no wall at a support, one wall per
@@ -276,10 +276,10 @@ def check_wall_set(walls: Walls, node_counts: np.ndarray, offsets: np.ndarray,
             i = int(bad[0])
             raise SceneError(f"wall[{i}].node = {nodes[i]} is support[{held[int(at[i])]}]: a "
                              "wall there carries no force")
-    _check_repeats(walls, 2 * at + (walls.sides == "-"))
+    _validate_repeats(walls, 2 * at + (walls.sides == "-"))
 
 
-def _check_repeats(walls: Walls, keys: np.ndarray) -> None:
+def _validate_repeats(walls: Walls, keys: np.ndarray) -> None:
     """One wall per node and side (``keys``: one number per (node, side))."""
     order = np.argsort(keys, kind="stable")
     repeated = np.flatnonzero(keys[order][1:] == keys[order][:-1])
