@@ -614,3 +614,22 @@ def test_a_corrupt_or_garbled_bundle_is_one_line_without_internals(tmp_path):
     text = one_line(raised.value, "z.npz")
     assert "0x" not in text and "<ast" not in text
 
+
+
+@pytest.mark.parametrize("field", ["K", "f", "C", "g"])
+def test_a_masked_entry_is_refused_and_an_unmasked_masked_array_read(field):
+    """A masked entry has no value to solve with (the data under the mask is not the user's);
+    a masked array with nothing masked is its values."""
+    arrays = {"K": np.array([[2.0, -1.0], [-1.0, 2.0]]), "f": np.array([1.0, 0.0]),
+              "C": np.array([[1.0, 0.0]]), "g": np.array([0.25])}
+    masked = dict(arrays)
+    mask = np.zeros(arrays[field].shape, dtype=bool)
+    mask.flat[-1] = True
+    masked[field] = np.ma.masked_array(arrays[field], mask)
+    with pytest.raises(contactqp.ProblemError, match=rf"^{field} has masked entries"):
+        contactqp.Problem(masked["K"], masked["f"], masked["C"], masked["g"])
+    plain = dict(arrays)
+    plain[field] = np.ma.masked_array(arrays[field], np.zeros_like(mask))
+    got = contactqp.Problem(plain["K"], plain["f"], plain["C"], plain["g"])
+    want = contactqp.Problem(arrays["K"], arrays["f"], arrays["C"], arrays["g"])
+    np.testing.assert_array_equal(contactqp.solve(got).u, contactqp.solve(want).u)

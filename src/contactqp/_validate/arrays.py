@@ -50,6 +50,11 @@ def numbers(name: str, value: Any, error: type[ContactqpError] = ProblemError) -
     if sp.issparse(value):
         raise error(f"{name} must be a dense array of numbers, got a sparse "
                     f"{type(value).__name__}")
+    if isinstance(value, np.ma.MaskedArray) and np.ma.getmaskarray(value).any():
+        # a masked entry has no value to solve with; its data underneath is not the user's
+        where = np.argwhere(np.ma.getmaskarray(value))[0]
+        raise error(f"{name} has masked entries ({name}[{', '.join(map(str, where))}] first): "
+                    f"give every value, e.g. {name}.filled(0.0)")
     try:
         raw = np.asarray(value)
     except (TypeError, ValueError, OverflowError) as reason:
