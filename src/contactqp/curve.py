@@ -27,7 +27,7 @@ from contactqp.errors import ContactqpError, OptionError
 from contactqp.many.prepared import prepare
 from contactqp.model import Model, scene_model, wall_stiffness
 from contactqp.model.sparse import problem_model
-from contactqp.problem import Problem
+from contactqp.problem import Problem, frictionless
 from contactqp.progress import Progress, as_progress
 from contactqp.result import Result, plain
 from contactqp.scene import MAX_ELEMENTS, Scene
@@ -153,7 +153,7 @@ def first_contact_factor(scene: Scene | Problem) -> float:
     SceneError
         A scene whose model cannot be built (see :func:`contactqp.build_model`).
     """
-    target = as_target(scene)
+    target = frictionless(as_target(scene), "first_contact_factor")
     if isinstance(target, Problem):
         model = problem_model(target)
         if model.singular:
@@ -223,7 +223,7 @@ def load_path(scene: Scene | Problem | None = None, steps: int = DEFAULT_STEPS,
     SceneError
         A scene whose loads leave a bar held by contact alone unheld.
     """
-    scene = as_target(scene)
+    scene = frictionless(as_target(scene), "load_path")
     factors = _factors(steps, scene)
     report = as_progress(progress, "load path")
     model = scene_model(scene) if isinstance(scene, Scene) else problem_model(scene)

@@ -27,6 +27,14 @@ symmetric. What is checked when it is made (:mod:`contactqp._validate` for the a
 What needs a factorisation of K (a negative pivot: K indefinite; rigid modes that nothing
 holds) is found when the model is built (:mod:`contactqp.model.sparse`). Files:
 :mod:`contactqp.problem_files` (``.npz`` bundles and Matrix Market folders).
+
+**Friction** (:mod:`contactqp.friction`, docs/friction.md). ``T`` (d·m x n) adds tangential
+rows, d = 1 (2D) or 2 (3D) per contact, contact i owning rows d·i … d·i + d − 1; with it exactly
+one of ``mu`` (Coulomb's coefficient per contact: the friction force may reach μᵢλ_N,i) or
+``slip_bound`` (Tresca's bound per contact, force: it may reach sᵢ), each one value per contact
+or one for all. A problem with no rows of C and a T is a contact without a normal row (a bar on
+a bed, Tresca only): its contacts are then ``slip_bound``'s entries (d = rows of T / entries),
+or T's rows for one value. Friction takes inequality rows only.
 """
 
 from __future__ import annotations
@@ -42,7 +50,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from contactqp import _validate
-from contactqp.errors import ProblemError
+from contactqp.errors import OptionError, ProblemError
 from contactqp.feasibility.rows import row_conflict
 
 KINDS = ("inequality", "equality")
@@ -80,6 +88,12 @@ class Problem:
         A label for the answer, e.g. "N, mm".
     name : str
         The problem's name, for tables.
+    T : sparse or dense array, d·m x n, optional
+        Tangential rows (module docstring): T(u − u_prev) is each contact's slip (length).
+    mu : float or array, m, optional
+        Coulomb's friction coefficient per contact (at least 0); needs T.
+    slip_bound : float or array, m, optional
+        Tresca's slip bound per contact (force, at least 0); needs T.
 
     Raises
     ------
@@ -98,6 +112,9 @@ class Problem:
     coordinates: np.ndarray | None = None
     units: str = ""
     name: str = ""
+    T: sp.csr_array | None = None
+    mu: np.ndarray | None = None
+    slip_bound: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         for key, value in validated(self).items():
@@ -114,6 +131,24 @@ class Problem:
         return int(self.g.size)
 
     @property
+    def friction(self) -> str | None:
+        """"coulomb" (``mu`` given), "tresca" (``slip_bound``) or None (no friction)."""
+        return None if self.T is None else ("coulomb" if self.mu is not None else "tresca")
+
+    @property
+    def contacts(self) -> int:
+        """The contacts friction acts on: m, or slip_bound's entries for a bed (no rows of C);
+        0 without friction."""
+        if self.T is None:
+            return 0
+        return self.m or int((self.slip_bound if self.mu is None else self.mu).size)
+
+    @property
+    def d(self) -> int:
+        """Tangential rows per contact: 1 (2D) or 2 (3D); 0 without friction."""
+        return self.T.shape[0] // self.contacts if self.T is not None else 0
+
+    @property
     def unit_names(self) -> tuple[str, str]:
         """(force, length) from the label ``units`` = "force, length" ("" where not given), as a
         scene's :attr:`~contactqp.scene.Scene.unit_names`."""
@@ -128,8 +163,10 @@ class Problem:
                                          dtype=bool))
 
     def __repr__(self) -> str:
+        friction = (f", {self.friction} friction on {self.contacts} contacts ({self.d + 1}D)"
+                    if self.T is not None else "")
         return (f"<Problem {self.name or 'unnamed'}: {self.n} dofs, {self.m} contact rows, "
-                f"{self.prescribed.size} prescribed>")
+                f"{self.prescribed.size} prescribed{friction}>")
 
     def with_values(self, f: Any = None, g: Any = None,
                     prescribed_values: Any = None) -> Problem:
@@ -155,6 +192,10 @@ class Problem:
         """
         problem = copy.copy(self)
         problem.__dict__.pop("_sparse_model", None)  # the model of these values is its own
+        # a friction model shares its factorisation with the next values' (K, C, T are kept)
+        kept = problem.__dict__.pop("_friction_model", None)
+        if kept is not None:
+            problem.__dict__["_friction_parent"] = kept
         changes = {"f": None if f is None else _validate.vector("f", f, self.n),
                    "g": None if g is None else _validate.vector("g", g, self.m),
                    "prescribed_values": None if prescribed_values is None else _validate.vector(
@@ -290,7 +331,71 @@ def validated(problem: Problem) -> dict[str, Any]:
     for key in ("units", "name"):
         _validate.one_line(key, getattr(problem, key))
     return {"K": K, "f": f, "C": C, "g": g, "prescribed": dofs, "prescribed_values": values,
-            "kinds": kinds, "names": names, "coordinates": coordinates}
+            "kinds": kinds, "names": names, "coordinates": coordinates,
+            **friction_fields(problem, n, g.size, kinds)}
 
 
-__all__ = ["KINDS", "MAX_DOFS", "SYMMETRY_RTOL", "Problem", "symmetric_part", "validated"]
+FRICTION_LAWS = {"mu": "Coulomb's friction coefficient", "slip_bound": "Tresca's slip bound"}
+
+
+def friction_fields(problem: Problem, n: int, m: int, kinds: tuple[str, ...]) -> dict[str, Any]:
+    """T, mu and slip_bound in the form a Problem keeps them (module docstring), or a
+    ProblemError naming the first bad one."""
+    given = [key for key in FRICTION_LAWS if getattr(problem, key) is not None]
+    if problem.T is None:
+        if given:
+            raise ProblemError(f"{given[0]} is given without T: friction needs the tangential "
+                               "rows T (d·m x n) it acts along")
+        return {"T": None, "mu": None, "slip_bound": None}
+    if not given:
+        raise ProblemError("T is given without mu (Coulomb) or slip_bound (Tresca): give "
+                           "the friction law per contact")
+    if len(given) == 2:
+        raise ProblemError("mu and slip_bound are both given: a contact follows Coulomb (mu) "
+                           "or Tresca (slip_bound); give one")
+    key = given[0]
+    if "equality" in kinds:
+        raise ProblemError(f"kinds: row {kinds.index('equality')} is an equality row; friction "
+                           "takes inequality contact rows only")
+    T = _validate.matrix("T", problem.T, (None, n))
+    law = _validate.numbers(key, getattr(problem, key))
+    if law.ndim > 1:
+        raise ProblemError(f"{key} must be one value per contact or one for all, got shape "
+                           f"{law.shape}")
+    if m == 0 and key == "mu":
+        raise ProblemError("mu needs normal rows C (Coulomb's bound is μ·λ_N); a contact "
+                           "without one (a bed) takes slip_bound")
+    contacts = m or (law.size if law.ndim == 1 else T.shape[0])
+    if contacts == 0 or T.shape[0] not in (contacts, 2 * contacts):
+        raise ProblemError(f"T has {T.shape[0]} rows for {contacts} contacts: it needs d·m "
+                           "rows, d = 1 (2D) or 2 (3D) per contact, contact i owning rows "
+                           "d·i … d·i + d − 1")
+    if law.ndim == 0:
+        law = np.full(contacts, float(law))
+    if law.size != contacts:
+        raise ProblemError(f"{key} has {law.size} entries for {contacts} contacts: give one per "
+                           "contact or one for all")
+    _validate.finite_in_range(key, law, True)
+    negative = np.flatnonzero(law < 0.0)
+    if negative.size:
+        i = int(negative[0])
+        raise ProblemError(f"{key}[{i}] = {float(law[i])!r} is negative: "
+                           f"{FRICTION_LAWS[key]} is at least 0 (0: no friction)")
+    values = {"mu": None, "slip_bound": None, key: _validate.frozen(law)}
+    return {"T": T, **values}
+
+
+def frictionless(problem: Any, what: str) -> Any:
+    """``problem`` where ``what`` can take it: anything but a Problem with friction, which
+    only :func:`contactqp.solve` and its friction methods solve and check (one line saying
+    so, never a frictionless answer in its place)."""
+    if isinstance(problem, Problem) and problem.T is not None:
+        raise OptionError(f"{what} takes no friction: the problem has {problem.friction} "
+                          "friction (T); solve it with contactqp.solve (methods lagrange, qp, "
+                          "cone, relaxed, semismooth_newton), whose Result checks it")
+    return problem
+
+
+__all__ = ["FRICTION_LAWS", "KINDS", "MAX_DOFS", "SYMMETRY_RTOL", "Problem", "friction_fields",
+           "frictionless",
+           "symmetric_part", "validated"]

@@ -1,6 +1,8 @@
 """A :class:`~contactqp.Problem` in files: one ``.npz`` bundle, or a folder of Matrix Market
 files (``K.mtx``, ``f.mtx``, ``C.mtx``, ``g.mtx``, as FE codes export them, and ``extra.npz``
-for the rest).
+for the rest). A problem with friction adds its tangential rows (``T_data``, ``T_indices``,
+``T_indptr``, ``T_shape`` in a bundle; ``T.mtx`` in a folder) and ``mu`` or ``slip_bound``
+(in the bundle, or the folder's ``extra.npz``).
 
 Files are read as a hostile user may send them: every read ends in a Problem or in one
 :class:`~contactqp.errors.ProblemError` line naming the file and what is wrong with it.
@@ -40,6 +42,7 @@ NPZ_MATRICES = ("K_data", "K_indices", "K_indptr", "C_data", "C_indices", "C_ind
                 "C_shape", "f", "g")
 NPZ_EXTRAS = ("prescribed", "prescribed_values", "kinds", "names", "coordinates", "units",
               "name")
+NPZ_FRICTION = ("T_data", "T_indices", "T_indptr", "T_shape", "mu", "slip_bound")
 ENTRY_BYTES = {"array": 2, "coordinate": 6}  # the fewest bytes an entry takes in the body
 
 
@@ -53,8 +56,9 @@ def memory_bytes() -> int:
 
 def save_problem(problem: Problem, path: str | os.PathLike) -> Path:
     """Write a problem to ``path``: one ``.npz`` bundle, or (a path without that suffix) a
-    folder of Matrix Market files K.mtx, f.mtx, C.mtx, g.mtx plus ``extra.npz`` for the
-    rest (prescribed dofs, kinds, names, coordinates, units, name).
+    folder of Matrix Market files K.mtx, f.mtx, C.mtx, g.mtx (and T.mtx with friction) plus
+    ``extra.npz`` for the rest (prescribed dofs, kinds, names, coordinates, units, name, mu,
+    slip_bound).
 
     Parameters
     ----------
@@ -103,11 +107,17 @@ def _write(problem: Problem, path: Path) -> Path:
              "units": np.array(problem.units), "name": np.array(problem.name)}
     if problem.coordinates is not None:
         extra["coordinates"] = problem.coordinates
+    for key in ("mu", "slip_bound"):
+        if getattr(problem, key) is not None:
+            extra[key] = getattr(problem, key)
     if path.suffix == ".npz":
-        K, C = problem.K, problem.C
+        K, C, T = problem.K, problem.C, problem.T
+        tangential = {} if T is None else {"T_data": T.data, "T_indices": T.indices,
+                                           "T_indptr": T.indptr, "T_shape": np.array(T.shape)}
         np.savez_compressed(path, K_data=K.data, K_indices=K.indices, K_indptr=K.indptr,
                             C_data=C.data, C_indices=C.indices, C_indptr=C.indptr,
-                            C_shape=np.array(C.shape), f=problem.f, g=problem.g, **extra)
+                            C_shape=np.array(C.shape), f=problem.f, g=problem.g, **extra,
+                            **tangential)
         return path
     if path.exists() and not path.is_dir():
         raise ProblemError(f"cannot write problem {str(path)!r}: it is a file, not a folder "
@@ -118,6 +128,10 @@ def _write(problem: Problem, path: Path) -> Path:
     for file, value in zip(MATRIX_MARKET, (problem.K, problem.f, problem.C, problem.g)):
         scipy.io.mmwrite(path / file, sp.coo_matrix(value) if sp.issparse(value)
                          else np.asarray(value).reshape(-1, 1), precision=17)
+    if problem.T is not None:
+        scipy.io.mmwrite(path / "T.mtx", sp.coo_matrix(problem.T), precision=17)
+    elif (path / "T.mtx").exists():  # a folder written before, with friction: not this one's
+        (path / "T.mtx").unlink()
     np.savez_compressed(path / "extra.npz", **extra)
     return path
 
@@ -133,7 +147,7 @@ def load_problem(path: str | os.PathLike, **fields: Any) -> Problem:
         The ``.npz`` file or the folder.
     **fields
         Given to :class:`Problem` over what the files say (prescribed, prescribed_values,
-        kinds, names, coordinates, units, name).
+        kinds, names, coordinates, units, name, T, mu, slip_bound).
 
     Returns
     -------
@@ -177,7 +191,29 @@ def _read_npz(path: Path) -> dict[str, Any]:
                                        arrays[f"{name}_indices"], arrays[f"{name}_data"],
                                        rows, cols)
         matrices[name] = sp.coo_array((v, (r, c)), shape=(rows, cols))
-    return {**matrices, "f": arrays["f"], "g": arrays["g"], **_extras(path, arrays)}
+    return {**matrices, "f": arrays["f"], "g": arrays["g"], **_extras(path, arrays),
+            **_tangential(path, arrays, n)}
+
+
+def _tangential(path: Path, arrays: dict[str, np.ndarray], n: int) -> dict[str, Any]:
+    """A bundle's T, checked as K and C are (its shape n columns), or nothing."""
+    keys = NPZ_FRICTION[:4]
+    present = [key for key in keys if key in arrays]
+    if not present:
+        return {}
+    if len(present) < len(keys):
+        missing = [key for key in keys if key not in arrays]
+        raise ProblemError(f"{path.name}: has {present[0]} but lacks {', '.join(missing)} "
+                           "(a problem's tangential rows T need all four)")
+    shape = arrays["T_shape"]
+    if shape.dtype.kind not in "iu" or shape.shape != (2,) or shape[1] != n or not (
+            0 <= shape[0] <= MAX_DOFS):
+        raise ProblemError(f"{path.name}: T_shape is {shape.tolist()!r}, but f makes T "
+                           f"(rows) x {n}")
+    rows = int(shape[0])
+    r, c, v = _validate.compressed(f"{path.name}: T", arrays["T_indptr"], arrays["T_indices"],
+                                   arrays["T_data"], rows, n)
+    return {"T": sp.coo_array((v, (r, c)), shape=(rows, n))}
 
 
 def _length(path: Path, arrays: dict[str, np.ndarray], key: str) -> int:
@@ -199,7 +235,7 @@ def _npz_arrays(path: Path) -> dict[str, np.ndarray]:
     with archive:
         for info in archive.infolist():
             key = info.filename[:-4] if info.filename.endswith(".npy") else None
-            if key not in NPZ_MATRICES + NPZ_EXTRAS:
+            if key not in NPZ_MATRICES + NPZ_EXTRAS + NPZ_FRICTION:
                 continue  # not one of a problem's arrays: never read
             arrays[key] = _member(path, archive, info, key)
     return arrays
@@ -252,7 +288,7 @@ def _reason(error: BaseException) -> str:
 def _extras(path: Path, data: dict[str, np.ndarray]) -> dict[str, Any]:
     """The fields beside K, f, C, g, in the form Problem takes (text as text)."""
     out: dict[str, Any] = {}
-    for key in ("prescribed", "prescribed_values", "coordinates"):
+    for key in ("prescribed", "prescribed_values", "coordinates", "mu", "slip_bound"):
         if key in data:
             out[key] = data[key]
     for key in ("kinds", "names"):
@@ -285,6 +321,12 @@ def _read_folder(path: Path) -> dict[str, Any]:
     f, g = _column(path / "f.mtx", f), _column(path / "g.mtx", g)
     _sizes_agree(K.shape, f.size, C.shape, g.size)
     arrays = {"K": K, "f": f, "C": C, "g": g}
+    if (path / "T.mtx").is_file():
+        T = _read_matrix_market(path / "T.mtx")
+        if T.shape[1] != K.shape[0]:
+            raise ProblemError(f"T.mtx has {T.shape[1]} columns but K.mtx is "
+                               f"{K.shape[0]}x{K.shape[1]}")
+        arrays["T"] = T
     extra = path / "extra.npz"
     if extra.exists():
         arrays.update(_extras(extra, _npz_arrays(extra)))

@@ -88,6 +88,13 @@ class Result(Reported):
         (the method) and check (this Result's quantities and its check).
     info : what the method reported beyond u and λ (e.g. a QP's scales and the solver's own
         timings; in the strain formulation ``element_force``, the tie rows' multipliers).
+    friction : "tresca" or "coulomb" for a problem with friction (None without; then the four
+        below are None too).
+    friction_force : m x d, per contact the friction force λ_T (force), acting on the dofs as
+        −Tᵀλ_T: along the slip, so that on the body it opposes it.
+    slip : m x d, T(u − u_prev): the slip of this increment (length).
+    stick : per contact, True where it does not slip in this increment.
+    state : per contact "open", "stick" or "slip".
     """
 
     model: ContactModel
@@ -117,6 +124,11 @@ class Result(Reported):
     element_force: np.ndarray | None = None
     stress: np.ndarray | None = None
     stress_ratio: float | None = None
+    friction: str | None = None
+    friction_force: np.ndarray | None = None
+    slip: np.ndarray | None = None
+    stick: np.ndarray | None = None
+    state: np.ndarray | None = None
 
     @property
     def scene(self) -> Scene | None:
@@ -160,6 +172,8 @@ class Result(Reported):
         force, length = self._units()
         if not self.verified:
             return f"NOT verified: {self.message}"
+        if self.friction is not None:
+            return f"verified: {self.message}"
         return (f"verified: every contact force and reaction is within "
                 f"{formatting.number(self.force_error_bound, '.1e')}{force}, every "
                 f"displacement within {formatting.number(self.displacement_error_bound, '.1e')}"
@@ -187,8 +201,10 @@ class Result(Reported):
             return f"scene: {self.scene.name} ({self.scene.units})"
         problem = self.problem
         units = f", {problem.units}" if problem.units else ""
+        friction = (f", {problem.friction} friction on {problem.contacts} contacts"
+                    if self.friction is not None else "")
         return (f"problem: {problem.name or 'unnamed'} ({problem.n} dofs, {problem.m} contact "
-                f"rows, {problem.prescribed.size} prescribed{units})")
+                f"rows, {problem.prescribed.size} prescribed{friction}{units})")
 
     def _reactions(self) -> str:
         force, _ = self._units()
@@ -212,6 +228,11 @@ class Result(Reported):
         if self.contact_force.size:
             lines += [f"contact forces{force and ' (' + force.strip() + ')'}: {self._forces()}",
                       f"largest penetration: {self._penetration()}"]
+        if self.friction is not None:
+            from contactqp.friction.answer import friction_lines  # scipy.linalg on first use
+
+            lines += friction_lines(self.friction, self.state, self.friction_force, self.slip,
+                                    force.strip(), self._units()[1].strip())
         if self.reactions.size:
             lines.append(self._reactions())
         lines.append(f"residuals (of F and U): {residuals}")
@@ -249,6 +270,10 @@ class Result(Reported):
             named = {"problem": self.problem.name, "units": self.problem.units}
         bars = ({"element_force": plain(self.element_force), "stress": plain(self.stress),
                  "stress_ratio": self.stress_ratio} if self.element_force is not None else {})
+        if self.friction is not None:
+            bars.update(friction=self.friction, friction_force=plain(self.friction_force),
+                        slip=plain(self.slip), stick=plain(self.stick),
+                        state=plain(self.state))
         return {
             **named, "method": self.method, "solver": self.solver,
             "contact": self.contact, "options": plain(self.options),

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -63,7 +64,7 @@ AUTO_CONDENSE_NODES = 512  # ... and at least this many free nodes (below, conde
 
 
 def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str = "lagrange",
-          contact: str = "inequality", formulation: str = "auto",
+          contact: str = "inequality", formulation: str = "auto", previous: Any = None,
           **options: Any) -> Result:
     """Solve a scene (or a user's own model) by one method and return the checked Result.
 
@@ -90,6 +91,11 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
         qp only: the element elongations are unknowns too, tied to the displacements by
         equality rows whose multipliers are the element forces:
         :func:`contactqp.model.elongation_rows`).
+    previous : Result or array, optional
+        For a problem with friction (``T`` with ``mu`` or ``slip_bound``): the state this
+        increment starts from (a Result of the same problem, or its u); the slip is measured
+        from its u (:mod:`contactqp.friction.methods` has the methods and options that take
+        friction; docs/friction.md). Default: from rest.
     **options
         The method's options (:data:`contactqp.methods.METHODS` names each), in the scene's
         units. "lagrange": ``max_iterations``, ``active_set`` ("hull" or "passed").
@@ -116,7 +122,8 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
     Raises
     ------
     OptionError
-        A bad method, contact, formulation or option (one line naming it and its value),
+        A bad method, contact, formulation, option or ``previous`` (one line naming it and
+        its value), a method that does not take friction (one line saying why),
         equality contact that ties a node twice, or a method that does not take the scene
         (Nitsche on an interior wall).
     SceneError
@@ -128,6 +135,11 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
     """
     if isinstance(scene, (str, os.PathLike)) and is_problem_path(scene):
         scene = load_problem(scene)
+    if isinstance(scene, Problem) and scene.T is not None:
+        return solve_friction_problem(scene, method, contact, formulation, previous, options)
+    if previous is not None:
+        raise OptionError("previous applies to problems with friction (the slip is measured "
+                          "from it); this one has none")
     if isinstance(scene, Problem):
         return solve_problem(scene, method, contact, formulation, options)
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
@@ -175,6 +187,111 @@ def solve_problem(problem: Problem, method: Any, contact: Any, formulation: Any,
     if held and not result.verified:
         _refuse_rows_that_leave_no_u(problem)
     return result
+
+
+def solve_friction_problem(problem: Problem, method: Any, contact: Any, formulation: Any,
+                           previous: Any, options: dict[str, Any]) -> Result:
+    """:func:`solve` for a problem with friction: its friction model (built once per
+    Problem), the method of :mod:`contactqp.friction.methods`, the friction check
+    (:mod:`contactqp.friction.check`), the Result with the friction forces and states."""
+    # imported here: scipy.linalg comes with the first solve that needs it, not at start-up
+    from contactqp.friction.check import check as check_friction
+    from contactqp.friction.law import coulomb, tresca
+    from contactqp.friction.methods import checked_friction_options, solve_friction
+    from contactqp.friction.model import problem_friction_model
+
+    if contact != "inequality":
+        raise OptionError(f"contact={contact!r}: friction takes unilateral contact "
+                          "(contact='inequality')")
+    if formulation != "auto":
+        raise OptionError(f"formulation={formulation!r} applies to bar scenes; a Problem "
+                          "is solved as given (formulation='auto')")
+    options = checked_friction_options(problem.friction, method, options)
+    previous_u, initial = _previous(problem, previous)
+    start = time.perf_counter()
+    model = problem_friction_model(problem)
+    values = problem.mu if problem.friction == "coulomb" else problem.slip_bound
+    built = time.perf_counter()
+    answer = solve_friction(model, problem.friction, values, method, options, previous_u,
+                            initial)
+    solved = time.perf_counter()
+    law = coulomb(model, values) if problem.friction == "coulomb" else tresca(model, values)
+    found = check_friction(model, law, answer, previous_u)
+    checked_at = time.perf_counter()
+    return make_friction_result(problem, answer, found, method=method, options=options,
+                                timings={"build": built - start, "solve": solved - built,
+                                         "check": checked_at - solved})
+
+
+@dataclass(frozen=True, eq=False)
+class FrictionView:
+    """What a Result reads of the model of a problem with friction (whose own model lives in
+    :mod:`contactqp.friction`): its problem, names and units; no chain."""
+
+    problem: Any
+    layout: None = None
+
+    @property
+    def row_names(self) -> tuple[str, ...]:
+        return self.problem.names
+
+    @property
+    def units(self) -> tuple[str, str]:
+        return self.problem.unit_names
+
+
+def make_friction_result(problem: Any, answer: Any, found: Any, *, method: str,
+                         options: dict[str, Any], timings: dict[str, float]) -> Result:
+    """The Result of a friction method's answer (:class:`~contactqp.friction.FrictionAnswer`)
+    and its check (:class:`~contactqp.friction.FrictionCheck`): ``verified`` and the bounds
+    are the friction check's; the reactions (K u − f + Cᵀλ_N + Tᵀλ_T at the prescribed dofs)
+    and the penetration are derived from u and the forces."""
+    lam_N = (answer.normal_force if answer.normal_force is not None else np.zeros(0))
+    u = answer.u
+    imbalance = (problem.K @ u - problem.f + problem.C.T @ lam_N
+                 + problem.T.T @ answer.friction_force.ravel())
+    F = found.residuals.force_scale
+    residuals = {key: value for key, value in vars(found.residuals).items()
+                 if key != "force_scale"}
+    warnings = [f"{answer.method} reported {answer.status!r} but the check failed"] if (
+        answer.converged and not found.verified) else []
+    return Result(
+        model=FrictionView(problem), method=method, solver=answer.method, contact="inequality",
+        options=dict(options), u=u, contact_force=lam_N, reactions=imbalance[problem.prescribed],
+        penetration=problem.C @ u - problem.g, residuals=residuals, verified=found.verified,
+        physical=not bool(np.any(lam_N < -1e-6 * F)), message=found.verdict,
+        force_error_bound=found.force_error_bound,
+        displacement_error_bound=found.displacement_error_bound, force_scale=F,
+        displacement_scale=found.displacement_scale, status=answer.status,
+        claimed_success=answer.converged, iterations=answer.iterations,
+        time=sum(timings.values()), timings=timings, warnings=tuple(warnings),
+        info={**answer.info, **({"history": list(answer.history)} if answer.history else {})},
+        friction=found.law, friction_force=answer.friction_force, slip=answer.slip,
+        stick=answer.stick, state=answer.state)
+
+
+def _previous(problem: Problem, previous: Any) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(u of the state an increment starts from, the forces to start the exact route from)
+    from ``previous``: a Result of a problem of the same size, or its u."""
+    if previous is None:
+        return None, None
+    if isinstance(previous, Result):
+        u = previous.u
+        if previous.friction_force is None or u.shape != (problem.n,):
+            raise OptionError(f"previous: a Result of {u.size} dofs "
+                              f"{'with' if previous.friction else 'without'} friction; it "
+                              f"must be an answer of this problem ({problem.n} dofs, friction)")
+        forces = np.concatenate([previous.contact_force, previous.friction_force.ravel()])
+        return u, forces
+    try:
+        u = np.asarray(previous, dtype=float)
+    except (TypeError, ValueError):
+        raise OptionError(f"previous must be a Result or the u it starts from, got "
+                          f"{type(previous).__name__}") from None
+    if u.shape != (problem.n,) or not np.all(np.isfinite(u)):
+        raise OptionError(f"previous: an array of shape {u.shape}; it must be the {problem.n} "
+                          "finite displacements the increment starts from")
+    return u, None
 
 
 def solve_kind(model: Any, contact: str) -> str:
@@ -251,6 +368,6 @@ def solve_model(model: Model, spec: Method, contact: str, formulation: str,
                     solution.claimed_success, solution.info)
 
 
-__all__ = ["AUTO_CONDENSE", "AUTO_CONDENSE_NODES", "as_scene", "as_target", "checked_call",
-           "chosen_formulation", "is_problem_path", "solve", "solve_kind", "solve_model",
-           "solve_problem"]
+__all__ = ["AUTO_CONDENSE", "AUTO_CONDENSE_NODES", "FrictionView", "as_scene", "as_target",
+           "checked_call", "chosen_formulation", "is_problem_path", "make_friction_result",
+           "solve", "solve_friction_problem", "solve_kind", "solve_model", "solve_problem"]

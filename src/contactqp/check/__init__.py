@@ -38,6 +38,7 @@ from contactqp.errors import OptionError
 from contactqp.model.base import ContactModel, natural_map
 from contactqp.model.chain.model import Model
 from contactqp.model.sparse import as_sparse_model
+from contactqp.problem import frictionless
 from contactqp.scene import Scene
 
 ChainBounds = Callable[[], tuple[float, float]]
@@ -120,7 +121,7 @@ def check(model: Any, u: Any, contact_force: Any, reactions: Any = None,
             model, u[model.free], lam, contact, tolerances,
             chain=lambda: chain_bounds(model, u, lam, reactions, contact, tolerances))
         return found
-    model = as_sparse_model(model)
+    model = as_sparse_model(frictionless(model, "contactqp.check"))
     u = _sized("u", u, model.problem.n)
     lam = _sized("contact_force", contact_force, model.n_contacts)
     found = check_model(model, u[model.free], lam, contact, tolerances)

@@ -30,7 +30,7 @@ from contactqp.model.chain import layout_of
 from contactqp.model.chain.floating import unheld_bars
 from contactqp.model.chain.layout_names import TOPOLOGY
 from contactqp.model.sparse import problem_model
-from contactqp.problem import Problem
+from contactqp.problem import Problem, frictionless
 from contactqp.problem_files import load_problem
 from contactqp.progress import as_progress
 from contactqp.result import Result, make_result
@@ -269,6 +269,7 @@ def prepare(scene: Scene | str | None = None, method: str = "lagrange",
     if isinstance(scene, (str, os.PathLike)) and is_problem_path(scene):
         scene = load_problem(scene)
     if isinstance(scene, Problem):
+        frictionless(scene, "prepare")
         return _prepare_problem(scene, method, contact, formulation, options)
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
     model = scene_model(scene)

@@ -13,7 +13,7 @@ from contactqp.methods import CONTACT_KINDS
 from contactqp.methods.penalty import TEXTBOOK_PENALTY
 from contactqp.methods.qp import available_qp_solvers
 from contactqp.model import contact_forces_on_nodes, largest
-from contactqp.problem import Problem
+from contactqp.problem import Problem, frictionless
 from contactqp.progress import as_progress, counter
 from contactqp.reference import reference
 from contactqp.result import Result
@@ -31,6 +31,7 @@ def study_size(scene: Scene | Problem, study: str) -> Scene | Problem:
     """``scene`` if ``study`` can hold its answers (:data:`MAX_STUDY_ELEMENTS` elements, or a
     problem's dofs), else a SceneError, before anything is solved."""
     if isinstance(scene, Problem):
+        frictionless(scene, study)
         if scene.n > MAX_STUDY_ELEMENTS:
             raise ProblemError(f"the problem has {scene.n} dofs; {study} keeps every run's "
                                f"answer in memory and takes at most {MAX_STUDY_ELEMENTS}: "
