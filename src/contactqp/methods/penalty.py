@@ -22,7 +22,8 @@ from contactqp.methods._active_set import (
 )
 from contactqp.methods.base import Solution
 from contactqp.model import Condensed, ContactModel, Model, wall_stiffness
-from contactqp.model.sparse import factorise
+from contactqp.model.augmented import penalised
+from contactqp.model.factor import factorise
 
 TEXTBOOK_PENALTY = 1e14  # N/m, the textbook example's ε (in SI units: penalty=1e14)
 PENALTY_PER_STIFFNESS = 1e6  # default ε: this many times the stiffness the walls see
@@ -92,20 +93,25 @@ def hull_start(model: Model | Condensed) -> np.ndarray | None:
 
 
 def penalised_solve(model: ContactModel, eps: np.ndarray, cache: dict[bytes, Any]):
-    """u(active, shift) = (K + C_AᵀE C_A)⁻¹ (P + C_Aᵀ shift_A): one factorisation per set."""
+    """u(active, shift) = (K + C_AᵀE C_A)⁻¹ (P + C_Aᵀ shift_A): one factorisation per set
+    (a numeric one on K's analysis where K's factor is CHOLMOD's)."""
     def solve(active: np.ndarray, shift: np.ndarray) -> np.ndarray:
         key = active.tobytes()
         if key not in cache:
             C_A = model.C[active]
             try:
-                cache[key] = factorise(sp.csc_matrix(
-                    model.K + C_A.T @ sp.diags_array(eps[active]) @ C_A))
+                cache[key] = penalised(model, np.where(active, eps, 0.0)) or factorise(
+                    sp.csc_matrix(model.K + C_A.T @ sp.diags_array(eps[active]) @ C_A))
             except RuntimeError:  # a zero pivot: K is singular along a mode no row in A holds
                 raise SolverError(
                     f"K + εC_AᵀC_A is singular with {int(active.sum())} rows in contact: K "
                     "leaves a mode free that they do not hold (lagrange and qp solve a K held "
                     "by contact alone)") from None
-        return cache[key].solve(model.P + model.C[active].T @ shift[active])
+        try:
+            return cache[key].solve(model.P + model.C[active].T @ shift[active])
+        except ArithmeticError:  # CHOLMOD: the penalised matrix is not positive definite
+            raise SolverError(f"K + εC_AᵀC_A is not positive definite with {int(active.sum())} "
+                              "rows in contact") from None
     return solve
 
 

@@ -9,7 +9,9 @@ kept (:meth:`~contactqp.model.sparse.SparseModel.flexibility`); u is one solve w
 set; the small dense W_AA is solved by Cholesky, scaled to a unit diagonal, or where rows
 repeat each other's constraint (a redundant row) by its eigen-decomposition, for the
 least-norm forces (:func:`small_solver`). Where K is singular and contact rows hold it, each
-set is solved as the saddle-point system instead (:func:`saddle_solve`). Lagrange's loop
+set is solved as the saddle-point system instead (:func:`saddle_solve`). Where K's factor is
+CHOLMOD's, a set of independent rows is solved by its augmented matrix instead, one numeric
+factorisation and no W_AA (:mod:`contactqp.model.augmented`). Lagrange's loop
 (:mod:`contactqp.methods.schur`) and the check (:mod:`contactqp.check.on_set`) both solve
 their sets here.
 """
@@ -23,6 +25,7 @@ import numpy as np
 
 from contactqp.errors import SolverError
 from contactqp.model import saddle
+from contactqp.model.augmented import augmented_set
 
 SparseModel = Any  # the model these functions read (contactqp.model.sparse.SparseModel)
 
@@ -72,7 +75,7 @@ def small_solve(model: SparseModel, rows: np.ndarray, rhs: np.ndarray) -> np.nda
 def redundant(model: SparseModel, rows: np.ndarray) -> bool:
     """Whether the rows' W_AA is singular: rows that repeat each other's constraint, so that
     the answer fixes their forces on the dofs, Cᵀλ, but not each row's."""
-    if not rows.size or model.factor is None:
+    if not rows.size or model.factor is None or augmented_set(model, rows) is not None:
         return False
     small_solve(model, rows, np.zeros(rows.size))
     return bool(model.cache.solver[2])
@@ -89,6 +92,10 @@ def on_set(model: SparseModel, active: np.ndarray) -> tuple[np.ndarray, np.ndarr
     u0 = model.free_displacement
     if not rows.size:
         return u0.copy(), lam
+    augmented = augmented_set(model, rows)
+    if augmented is not None:  # one numeric factorisation, no W_AA
+        u, lam[rows] = augmented.answer_on_set(model)
+        return u, lam
     lam[rows] = small_solve(model, rows, model.C[rows] @ u0 - model.g[rows])
     return model.solve_K(model.P - model.C.T @ lam), lam
 
@@ -115,6 +122,13 @@ def correction(model: SparseModel, rows: np.ndarray, residual: np.ndarray,
     if model.factor is None:
         du, dlam = saddle_solve(model, rows, residual,
                                 np.zeros(rows.size) if gap is None else gap)
+        return dlam, du
+    augmented = augmented_set(model, rows)
+    if augmented is not None:
+        # one Uzawa step: a correction's own error is 1/(1 + STIFFER) of it or less, and the
+        # refinement that asks for it measures what is left (contactqp.check.on_set)
+        du, dlam = augmented.solve(model, residual, np.zeros(rows.size) if gap is None else gap,
+                                   steps=1)
         return dlam, du
     y = model.solve_K(residual)
     if not rows.size:

@@ -1,0 +1,251 @@
+"""The set solve of a sparse model by the augmented matrix: the exact answer with a set A of
+rows held on their gaps at the cost of one numeric factorisation, whatever the number of rows.
+
+The answer on A solves the saddle-point system K u + C_Aᵀλ = f, C_A u = g_A. Adding
+C_Aᵀ R (C_A u − g_A) = 0 to the first equation (R = diag ρ_i > 0) changes nothing of the answer:
+
+    (K + C_Aᵀ R C_A) u + C_Aᵀλ = f + C_Aᵀ R g_A,   C_A u = g_A.
+
+M_A = K + C_Aᵀ R C_A is symmetric positive definite, and its pattern is one pattern for every
+set (that of K + CᵀC, every row's: :func:`contactqp.model.factor.cholmod_of`), so a set costs
+one numeric factorisation on a symbolic analysis made once. λ follows by Uzawa's iteration on
+the augmented system, written as iterative refinement with the residuals of the saddle-point
+system itself (r = f − K u − C_Aᵀλ by a product with K, s = g_A − C_A u):
+
+    u ← u + M_A⁻¹(r + C_Aᵀ R s),   λ ← λ + R (C_A u − g_A),
+
+whose error in λ shrinks per step by 1/(1 + μ), μ the eigenvalues of R^½ W_AA R^½ (W_AA =
+C_A K⁻¹ C_Aᵀ). With ρ_i = STIFFER × s̄_i (s̄_i = c_iᵀK c_i/(c_iᵀc_i)², at least the stiffness
+the row sees: :attr:`~contactqp.model.base.ContactModel.row_stiffness`) each row's own entry
+of R^½ W_AA R^½ is at least STIFFER, so a few steps reach round-off (3–4 on the Hertz
+cylinder; the steps stop where they no longer shrink by SLOWER, round-off noise); the
+residuals are the system's own, so the fixed point is the exact answer, not the penalised one
+(no dense W_AA is formed; each step is one solve with M_A's factor). A correction for the
+refinement of an answer (:func:`contactqp.model.schur.correction`) is one step: its error is
+what the refinement measures next (:mod:`contactqp.check.on_set`). Rows that repeat each other's constraint (C_A of lower rank: the
+answer fixes only Cᵀλ) keep the Schur complement's least-norm solve
+(:mod:`contactqp.model.schur`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from contactqp.errors import SolverError
+from contactqp.model.factor import Cholmod, CholmodK
+
+SparseModel = Any  # the model these functions read (contactqp.model.sparse.SparseModel)
+
+STIFFER = 1e4  # ρ_i = this × s̄_i: each row's augmented stiffness, against its own
+STEPS = 40  # Uzawa steps at most per solve
+EXACT = 1e-15  # of F and U: a step below this is round-off, the solve stops
+SLOWER = 0.5  # a step that shrinks by less than this after the first few: round-off noise
+KEPT = 2  # augmented factors kept per model (the last sets solved)
+UPDATE_ROWS = 4  # a set that differs from the held one by this many rows or fewer is solved
+# from its factor (Woodbury): a solve costs about a fifth of a numeric factorisation (CHOLMOD,
+# 2D, 9·10⁴ dofs)
+
+
+@dataclass(frozen=True, eq=False)
+class RowProducts:
+    """Every row's entries of CᵀC in the lower triangle, as positions in the pattern's
+    values: row i adds ρ_i × ``products`` at ``positions`` where ``row`` is i."""
+
+    row: np.ndarray
+    positions: np.ndarray
+    products: np.ndarray
+
+    @classmethod
+    def of(cls, C: sp.csr_array, engine: Cholmod) -> RowProducts:
+        C = sp.csr_array(C)
+        C.sort_indices()
+        counts = np.diff(C.indptr)
+        row = np.repeat(np.arange(counts.size), counts**2)
+        start = np.repeat(np.concatenate(([0], np.cumsum(counts**2)[:-1])), counts**2)
+        within = np.arange(row.size) - start
+        first = C.indptr[row] + within // counts[row]
+        second = C.indptr[row] + within % counts[row]
+        lower = C.indices[first] >= C.indices[second]
+        first, second, row = first[lower], second[lower], row[lower]
+        return cls(row, engine.position(C.indices[first], C.indices[second]),
+                   C.data[first] * C.data[second])
+
+
+@dataclass(eq=False)
+class Update:
+    """M_A⁻¹ from the held factor of a set B's M_B and the few rows V where A and B differ
+    (Woodbury): M_A = M_B + Vᵀ D V, D = diag(ρ) on the rows A adds and −ρ on those it drops,
+    M_A⁻¹ = M_B⁻¹ − Z (D⁻¹ + V Z)⁻¹ Zᵀ with Z = M_B⁻¹Vᵀ (one solve per row; where rows are
+    dropped the capacitance loses about log₁₀ STIFFER digits to cancellation, which the Uzawa
+    steps, on the system's own residuals, do not keep)."""
+
+    key: bytes = field(repr=False)  # the held factor's
+    V: sp.csr_array = field(repr=False)
+    signed: np.ndarray = field(repr=False)  # D's diagonal
+    Z: np.ndarray | None = field(default=None, repr=False)
+    capacitance: np.ndarray | None = field(default=None, repr=False)
+
+    def solve(self, engine: Cholmod, rhs: np.ndarray) -> np.ndarray:
+        if self.Z is None:
+            self.Z = engine.solve(self.V.T.toarray())
+            self.capacitance = np.diag(1.0 / self.signed) + self.V @ self.Z
+        y = engine.solve(rhs)
+        return y - self.Z @ np.linalg.solve(self.capacitance, self.V @ y)
+
+
+@dataclass(eq=False)
+class AugmentedSet:
+    """One set of rows and its augmented matrix M_A's values (factored when asked, or served
+    by ``update`` from the factor of the set before while that is held)."""
+
+    rows: np.ndarray
+    rho: np.ndarray
+    values: np.ndarray
+    key: bytes = field(repr=False)
+    steps: int = 0  # Uzawa steps taken, over every solve with this set
+    answer: tuple | None = field(default=None, repr=False)  # (P, g_A, u, λ_A) on P, g
+    update: Update | None = None
+
+    def operator(self, model: SparseModel):
+        """(M_A⁻¹ as a function, the key of the factor it reads): the held factor of M_A, or
+        of the set before with ``update``, or M_A factored now."""
+        engine = model.factor.engine
+        if engine.holds == self.key:
+            return engine.solve, self.key
+        if self.update is not None and engine.holds == self.update.key:
+            update = self.update
+            return (lambda rhs: update.solve(engine, rhs)), update.key
+        try:
+            engine.factor(self.key, self.values)
+        except ArithmeticError:
+            raise SolverError("K + C_AᵀRC_A is not positive definite") from None
+        model.cache.set_factorisations += 1
+        return engine.solve, self.key
+    def answer_on_set(self, model: SparseModel, start: tuple[np.ndarray, np.ndarray] | None
+                      = None) -> tuple[np.ndarray, np.ndarray]:
+        """(u, λ_A) with the rows held on their gaps under the model's loads, to round-off,
+        from ``start`` (an earlier step's (u, λ_A)) if given; kept (Lagrange's last set is
+        the check's)."""
+        gap = model.g[self.rows]  # a model with other loads or gaps shares the sets
+        if self.answer is None or self.answer[0] is not model.P or not np.array_equal(
+                self.answer[1], gap):
+            self.answer = (model.P, gap, *self.solve(model, model.P, gap, start=start))
+        return self.answer[2].copy(), self.answer[3].copy()
+
+    def solve(self, model: SparseModel, force: np.ndarray, gap: np.ndarray,
+              within: float = EXACT, steps: int = STEPS,
+              start: tuple[np.ndarray, np.ndarray] | None = None
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """(u, λ_A) with K u + C_Aᵀλ_A = force and C_A u = gap (module docstring), to
+        round-off, or until a step is below ``within`` (of F and U), or ``steps`` steps;
+        from ``start`` (u, λ_A) where given, else from 0."""
+        F, U = model.force_scale, model.displacement_scale  # K's solves first
+        engine = model.factor.engine
+        inverse, held = self.operator(model)
+        C_A = model.C[self.rows]
+        u, lam = ((np.zeros(model.n_free), np.zeros(self.rows.size)) if start is None
+                  else (start[0].copy(), start[1].copy()))
+        last = np.inf
+        for step in range(steps):
+            r = force - model.K @ u - C_A.T @ lam
+            s = gap - C_A @ u
+            if engine.holds != held:  # nothing between the steps solves with K
+                raise SolverError("the augmented factor was replaced during its solve")
+            du = inverse(r + C_A.T @ (self.rho * s))
+            u = u + du
+            dlam = self.rho * (C_A @ u - gap)
+            lam = lam + dlam
+            self.steps += 1
+            size = max(float(np.abs(du).max(initial=0.0)) / U,
+                       float(np.abs(dlam).max(initial=0.0)) / F)
+            if size <= within or (step >= 1 and size > SLOWER * last):
+                break
+            last = size
+        return u, lam
+
+
+def augmented_values(model: SparseModel, weight: np.ndarray) -> np.ndarray:
+    """The values of K + Cᵀ diag(weight) C on the analysed pattern (weight: per row, 0 for
+    the rows left out)."""
+    products = model.cache.products
+    if products is None:
+        products = model.cache.products = RowProducts.of(model.C, model.factor.engine)
+    return model.factor.values + np.bincount(
+        products.positions, weights=weight[products.row] * products.products,
+        minlength=model.factor.values.size)
+
+
+@dataclass(eq=False)
+class Penalised:
+    """K + C_Aᵀ E C_A on the shared analysis, factored when a solve asks for it: the penalty's
+    and the augmented Lagrangian's matrix of a set (:mod:`contactqp.methods.penalty`)."""
+
+    model: SparseModel
+    values: np.ndarray = field(repr=False)
+    key: tuple = field(repr=False)
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        engine = self.model.factor.engine
+        if engine.holds != self.key:
+            self.model.force_scale  # noqa: B018 - K's solves for the scales first
+            engine.factor(self.key, self.values)  # ArithmeticError where not definite
+            self.model.cache.set_factorisations += 1
+        return engine.solve(rhs)
+
+
+def penalised(model: SparseModel, weight: np.ndarray) -> Penalised | None:
+    """K + Cᵀ diag(weight) C by CHOLMOD on K's analysis, or None where K's factor is not
+    CHOLMOD's."""
+    if not isinstance(model.factor, CholmodK):
+        return None
+    return Penalised(model, augmented_values(model, weight), ("penalty", weight.tobytes()))
+
+
+def augmented_set(model: SparseModel, rows: np.ndarray) -> AugmentedSet | None:
+    """The augmented set solve of ``rows`` (kept: the last KEPT sets), or None where K's
+    factor is not CHOLMOD's (SuperLU keeps no analysis to reuse) or the rows repeat each
+    other's constraint."""
+    if not isinstance(model.factor, CholmodK) or not rows.size:
+        return None
+    key = rows.tobytes()
+    sets = model.cache.sets
+    found = sets.get(key)
+    if found is not None:
+        return found
+    from contactqp.model.saddle import rows_dependent
+
+    C_A = model.C[rows]
+    if rows_dependent(C_A):
+        return None
+    rho = STIFFER * model.row_stiffness[rows]
+    weight = np.zeros(model.n_contacts)
+    weight[rows] = rho
+    found = AugmentedSet(rows.copy(), rho, augmented_values(model, weight), key,
+                         update=_update(model, rows))
+    while len(sets) >= KEPT:
+        sets.pop(next(iter(sets)))
+    sets[key] = found
+    return found
+
+
+def _update(model: SparseModel, rows: np.ndarray) -> Update | None:
+    """The Woodbury update from the set whose factor is held, where ``rows`` differ from it
+    by 1 to UPDATE_ROWS rows; else None."""
+    held = model.cache.sets.get(model.factor.engine.holds)
+    if held is None:
+        return None
+    added, dropped = np.setdiff1d(rows, held.rows), np.setdiff1d(held.rows, rows)
+    if not 0 < added.size + dropped.size <= UPDATE_ROWS:
+        return None
+    changed = np.concatenate((added, dropped))
+    rho = STIFFER * model.row_stiffness[changed]
+    return Update(held.key, sp.csr_array(model.C[changed]),
+                  np.concatenate((rho[:added.size], -rho[added.size:])))
+
+
+__all__ = ["EXACT", "STIFFER", "AugmentedSet", "Penalised", "RowProducts", "augmented_set",
+           "augmented_values", "penalised"]

@@ -1,0 +1,147 @@
+"""The sparse model's exact method at the cost of a few factorisations
+(contactqp.model.augmented, contactqp.model.factor): each set of rows held is one numeric
+factorisation of K + C_AᵀRC_A on a pattern analysed once, λ by Uzawa's iteration on the
+saddle-point system's own residuals.
+
+Every expected number comes from elsewhere: the dense saddle-point system solved by LAPACK,
+a diagonal K in closed form, exact rational arithmetic (tests/test_problem_solve.py's
+exact_answer), and the SuperLU route (the Schur complement W_AA) on the same problem.
+
+Glossary: K stiffness, f loads, C rows, g gaps, A the rows held, λ their forces (positive
+when they push), u the displacements, R = diag ρ the rows' augmented stiffness.
+"""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import contactqp
+from contactqp.model import factor as factor_module
+from contactqp.model.augmented import augmented_set
+from contactqp.model.factor import CholmodK
+from contactqp.model.sparse import build_sparse_model
+from test_problem_solve import Infeasible, exact_answer, random_problem
+
+pytest.importorskip("cvxopt")
+
+
+def spring_chain(n: int, rng: np.random.Generator) -> sp.csr_array:
+    """A grounded chain of springs with stiffnesses in [1, 10) (SPD, tridiagonal)."""
+    k = rng.uniform(1.0, 10.0, n + 1)
+    main = k[:-1] + k[1:]
+    return sp.csr_array(sp.diags([-k[1:-1], main, -k[1:-1]], [-1, 0, 1]))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_set_solve_equals_the_dense_saddle_point_system(seed):
+    """Rows of 1-4 dofs each (CᵀC adds entries off K's pattern): the augmented set solve
+    gives the saddle-point system's answer, solved densely by LAPACK, to round-off (1e-10 of
+    the largest force and displacement: the dense solve's own round-off on a condition number
+    of about 10⁴)."""
+    rng = np.random.default_rng(seed)
+    n, m = 40, 12
+    K = spring_chain(n, rng)
+    C = np.zeros((m, n))
+    for i in range(m):
+        dofs = rng.choice(n, int(rng.integers(1, 5)), replace=False)
+        C[i, dofs] = rng.choice([-2.0, -1.0, 1.0, 2.0], dofs.size)
+    f = rng.uniform(-1.0, 1.0, n)
+    g = rng.uniform(-0.1, 0.1, m)
+    model = build_sparse_model(contactqp.Problem(K, f, sp.csr_array(C), g))
+    assert isinstance(model.factor, CholmodK)
+    rows = np.sort(rng.choice(m, 6, replace=False))
+    if np.linalg.matrix_rank(C[rows]) < rows.size:
+        pytest.skip("dependent rows: the Schur complement's least-norm solve applies")
+    u, lam = augmented_set(model, rows).solve(model, model.P, model.g[rows])
+    saddle = np.block([[K.toarray(), C[rows].T], [C[rows], np.zeros((rows.size, rows.size))]])
+    exact = np.linalg.solve(saddle, np.concatenate((f, g[rows])))
+    assert np.abs(u - exact[:n]).max() <= 1e-10 * np.abs(exact[:n]).max()
+    assert np.abs(lam - exact[n:]).max() <= 1e-10 * np.abs(exact[n:]).max()
+
+
+def test_diagonal_K_past_the_int32_keys():
+    """n = 50 000 dofs (n² passes 2³¹: the pattern's keys need 64 bits), K = diag(k), a row
+    −u_i <= g_i on every third dof, loads that push every second of those past it: closed
+    form, u_i = f_i / k_i where the row is open; where it holds, u_i = −g_i and, from
+    k_i u_i − λ_i = f_i, λ_i = −k_i g_i − f_i. Tolerance 1e-12: the answers are of order 1
+    and each is a few operations on numbers of order 1."""
+    rng = np.random.default_rng(7)
+    n = 50_000
+    k = rng.uniform(1.0, 3.0, n)
+    held = np.arange(0, n, 3)
+    f = np.zeros(n)
+    f[held[::2]] = -2.0  # pushes u below −g: the row holds
+    f[held[1::2]] = 0.5  # pulls away: open
+    g = np.full(held.size, 0.25)
+    C = sp.csr_array((-np.ones(held.size), (np.arange(held.size), held)), shape=(held.size, n))
+    result = contactqp.solve(contactqp.Problem(sp.diags_array(k).tocsr(), f, C, g), "lagrange")
+    u = f / k
+    u[held[::2]] = -0.25
+    lam = np.zeros(held.size)
+    lam[::2] = -k[held[::2]] * 0.25 - f[held[::2]]
+    assert result.verified
+    assert np.abs(result.u - u).max() <= 1e-12
+    assert np.abs(result.contact_force - lam).max() <= 1e-12
+
+
+@pytest.mark.parametrize("seed", range(40))
+@pytest.mark.parametrize("route", ["cholmod", "superlu"])
+def test_random_problems_exact_by_either_route(seed, route, monkeypatch):
+    """The random spring networks of tests/test_problem_solve.py, by the augmented route
+    (CHOLMOD) and by the Schur complement (SuperLU, as without the extra): both give the
+    exact rational answer within their own bounds (a verified answer is within its bound)."""
+    if route == "superlu":
+        monkeypatch.setattr(factor_module, "cholmod_installed", lambda: False)
+    try:
+        problem = random_problem(seed)
+        u, lam = exact_answer(problem)
+    except (contactqp.ContactqpError, Infeasible):
+        pytest.skip("no u meets every row")
+    try:
+        result = contactqp.solve(problem, "lagrange")
+    except contactqp.ContactqpError:
+        return  # refused: nothing claimed
+    if not result.verified:
+        return
+    assert np.abs(result.contact_force - lam).max() <= result.force_error_bound + 1e-12
+    assert np.abs(result.u - u).max() <= result.displacement_error_bound + 1e-12
+
+
+def test_hertz_by_both_routes_agree(monkeypatch):
+    """The Hertz cylinder (contactqp.fem, 7 646 dofs): the augmented route and the Schur
+    complement's find the same rows in contact and forces within the sum of their bounds;
+    the augmented route spends one numeric factorisation per set and no flexibility column."""
+    from contactqp.fem import cylinder_on_flat
+
+    problem = cylinder_on_flat(zone=0.5, fine=0.05).problem
+    by_sets = contactqp.solve(problem, "lagrange")
+    monkeypatch.setattr(factor_module, "cholmod_installed", lambda: False)
+    again = contactqp.Problem(problem.K, problem.f, problem.C, problem.g,
+                              prescribed=problem.prescribed,
+                              prescribed_values=problem.prescribed_values)
+    by_schur = contactqp.solve(again, "lagrange")
+    assert by_sets.verified and by_schur.verified
+    assert np.array_equal(by_sets.contact_force > 0, by_schur.contact_force > 0)
+    assert np.abs(by_sets.contact_force - by_schur.contact_force).max() <= (
+        by_sets.force_error_bound + by_schur.force_error_bound)
+    assert by_sets.info.get("active_set") == "primal-dual"
+    assert by_sets.info["set_factorisations"] <= by_sets.iterations
+
+
+def test_other_gaps_share_the_sets_not_their_answers():
+    """A problem with other gaps (Problem.with_values) shares K's analysis and the sets'
+    augmented matrices, not their answers: its forces equal those of the same problem built
+    afresh (another model, nothing shared) within the two bounds."""
+    from contactqp.fem import cylinder_on_flat
+
+    problem = cylinder_on_flat(zone=0.5, fine=0.05).problem
+    first = contactqp.solve(problem, "lagrange")
+    moved = problem.with_values(g=problem.g + 0.001)
+    shared = contactqp.solve(moved, "lagrange")
+    afresh = contactqp.solve(contactqp.Problem(
+        moved.K, moved.f, moved.C, moved.g, prescribed=moved.prescribed,
+        prescribed_values=moved.prescribed_values), "lagrange")
+    assert first.verified and shared.verified and afresh.verified
+    assert np.abs(shared.contact_force - afresh.contact_force).max() <= (
+        shared.force_error_bound + afresh.force_error_bound)
+    assert shared.contact_force.sum() < first.contact_force.sum()  # wider gaps: less load
