@@ -116,10 +116,6 @@ def test_every_method_on_both_front_ends(scene_and_exact, method, front):
     within its bound of the exact reference; the two front ends' answers check alike."""
     scene, exact = scene_and_exact
     target = scene if front == "scene" else contactqp.problem_from_scene(scene)
-    if front == "problem" and method in ("penalty", "augmented") and scene.name.startswith(
-            "a bar held by contact"):
-        pytest.xfail("TODO: the sparse penalty and augmented Lagrangian need K⁻¹ (a floating "
-                     "body refused with a reason, where the chain pins the set)")
     result = solved(target, method, {})
     if result is None:  # refused: the other front end refuses too (one reason, one registry)
         other = scene if front == "problem" else contactqp.problem_from_scene(scene)

@@ -633,3 +633,15 @@ def test_a_masked_entry_is_refused_and_an_unmasked_masked_array_read(field):
     got = contactqp.Problem(plain["K"], plain["f"], plain["C"], plain["g"])
     want = contactqp.Problem(arrays["K"], arrays["f"], arrays["C"], arrays["g"])
     np.testing.assert_array_equal(contactqp.solve(got).u, contactqp.solve(want).u)
+
+
+@pytest.mark.parametrize("method", ["lagrange", "penalty", "augmented", "qp", "lemke", "pgs",
+                                    "semismooth_newton"])
+def test_a_problem_with_no_contact_rows_is_k_inverse_f_by_every_method(method):
+    """No rows: the answer is K⁻¹f (here [1, 2] by hand), verified; the sparse penalty's row
+    products once failed on an empty C."""
+    K = np.array([[2.0, -1.0], [-1.0, 1.0]])
+    problem = contactqp.Problem(K, [0.0, 1.0], np.zeros((0, 2)), [])
+    result = contactqp.solve(problem, method)
+    assert result.verified and result.contact_force.size == 0
+    np.testing.assert_allclose(result.u, [1.0, 2.0], rtol=1e-12)

@@ -19,6 +19,7 @@ from contactqp import linalg
 from contactqp.methods._active_set import DECISION_RTOL, active_set_loop, pinning
 from contactqp.methods.base import Solution
 from contactqp.methods.penalty import equalities, penalised_solve
+from contactqp.methods.schur import pinning as sparse_pinning
 from contactqp.model import Condensed, ContactModel, Model, wall_stiffness, without_circulation
 
 AUGMENTED_PER_STIFFNESS = 100.0  # default ε: this many times the stiffness the rows see
@@ -113,9 +114,11 @@ def _general(model: ContactModel, contact: str, *, penalty: float | None = None,
         return np.where(active, trial > -band, trial > band) | equality
 
     previous = np.inf
+    # K singular (a body held by contact alone): each set holds what K leaves free
+    general_pin = sparse_pinning(model) if model.factor is None else None
     for iteration in range(1, max_iterations + 1):
         u, trial, _ = active_set_loop(model.n_contacts, step, update, method="augmented",
-                                      start=equality | (lam > 0.0))
+                                      start=equality | (lam > 0.0), pin=general_pin)
         new_lam = np.where(equality, trial, np.maximum(trial, 0.0))
         change = float(np.abs(new_lam - lam).max(initial=0.0))
         lam = new_lam

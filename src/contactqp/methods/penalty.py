@@ -21,6 +21,7 @@ from contactqp.methods._active_set import (
     pinning,
 )
 from contactqp.methods.base import Solution
+from contactqp.methods.schur import pinning as sparse_pinning
 from contactqp.model import Condensed, ContactModel, Model, wall_stiffness
 from contactqp.model.augmented import penalised
 from contactqp.model.factor import factorise
@@ -138,8 +139,11 @@ def _general(model: ContactModel, contact: str, *, penalty: float | None = None,
         pen, tol = model.C @ u - g, DECISION_RTOL * U
         return np.where(active, pen > -tol, pen > tol) | equality
 
+    # K singular (a body held by contact alone): each set holds what K leaves free, as
+    # Lagrange's does (methods.schur.pinning), from the rows that hold it
+    pin = sparse_pinning(model) if model.factor is None else None
+    start = equality if pin is not None else equality | (model.C @ model.free_displacement > g)
     u, lam, iterations = active_set_loop(model.n_contacts, step, update, method="penalty",
-                                         max_iterations=max_iterations,
-                                         start=equality | (model.C @ model.free_displacement > g))
+                                         max_iterations=max_iterations, start=start, pin=pin)
     return Solution(u, lam, solver="penalty", iterations=iterations,
                     info={"penalty": float(eps.max(initial=0.0))})

@@ -65,7 +65,7 @@ class RowProducts:
         C.sort_indices()
         counts = np.diff(C.indptr)
         row = np.repeat(np.arange(counts.size), counts**2)
-        start = np.repeat(np.concatenate(([0], np.cumsum(counts**2)[:-1])), counts**2)
+        start = np.repeat(np.cumsum(counts**2) - counts**2, counts**2)  # each row's first
         within = np.arange(row.size) - start
         first = C.indptr[row] + within // counts[row]
         second = C.indptr[row] + within % counts[row]
