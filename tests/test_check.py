@@ -11,6 +11,7 @@ carry F − λ = 10 kN, u = [0, 0.05, 0.15] mm, and the support pulls back with 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -36,6 +37,7 @@ from contactqp import (
 )
 from contactqp.check.chain import section_residual
 from contactqp.random_scenes import random_scene
+from contactqp.reference import reference
 
 U_CONTACT = [0.0, 5e-5, 1.5e-4]  # m: 10 kN through k_0 = 2e8 N/m, then through k_1 = 1e8 N/m
 
@@ -285,3 +287,23 @@ def test_the_check_writes_into_none_of_its_inputs(builder):
         again = contactqp.check(scene, *inputs, "inequality")
         assert (found.verified, found.residuals) == (again.verified, again.residuals)
         assert found.verified == result.verified
+
+
+@pytest.mark.parametrize("front", ["scene", "problem"])
+def test_a_tiny_pull_through_a_soft_row_counts_as_the_move_it_makes(front):
+    """tests/scenes/a_touching_wall_on_a_soft_unloaded_bar.toml: bar 0 carries no load, so its
+    exact displacement is 0; an answer that puts its free nodes on the wall beside node 2
+    (5.9e-12 m away) balances only with a pull of 9.6e-7 N there (1e-10 F), which the
+    general certificate once accepted as round-off: the bound said 4.5e-9 U where the answer is
+    1.6e-4 U off. The bound must cover the error, so the answer is not verified."""
+    path = Path(__file__).parent / "scenes" / "a_touching_wall_on_a_soft_unloaded_bar.toml"
+    scene = contactqp.load_scene(path)
+    exact = reference(scene)
+    u = exact.displacement.copy()
+    u[1:4] = -scene.walls[0].gap  # bar 0's free nodes (its node 0 is supported) on the wall
+    target = scene if front == "scene" else contactqp.problem_from_scene(scene)
+    found = contactqp.check(target, u, exact.contact_force)
+    error = float(np.abs(u - exact.displacement).max())
+    assert error == pytest.approx(scene.walls[0].gap)  # by construction
+    assert found.displacement_error_bound >= error * (1 - 1e-6)
+    assert not found.verified
