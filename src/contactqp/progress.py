@@ -10,9 +10,12 @@ nothing. The command line shows long runs this way.
 
 from __future__ import annotations
 
+import contextlib
+import io
+import os
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any, TextIO
 
 from contactqp.errors import OptionError
@@ -77,4 +80,36 @@ def counter(progress: Progress | None, total: int) -> Callable[[], None]:
     return advance
 
 
-__all__ = ["QUIET_SECONDS", "Progress", "Report", "as_progress", "counter"]
+class _Sink(io.TextIOBase):
+    """A text stream that keeps nothing."""
+
+    def write(self, text: str) -> int:
+        return len(text)
+
+
+_SINK = _Sink()
+
+
+@contextlib.contextmanager
+def silenced() -> Iterator[None]:
+    """Nothing written to standard output or error gets out meanwhile: from Python (OSQP's
+    "Polishing not needed") nor from C (HiGHS's banner and presolve notes), through file
+    descriptors 1 and 2 (a few microseconds). The QP backends and the friction cone programs
+    run their solvers inside it: the library prints nothing unless asked."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        with contextlib.redirect_stdout(_SINK), contextlib.redirect_stderr(_SINK):
+            yield
+    finally:
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for handle in (*saved, null):
+            os.close(handle)
+
+
+__all__ = ["QUIET_SECONDS", "Progress", "Report", "as_progress", "counter", "silenced"]

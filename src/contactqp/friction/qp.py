@@ -27,12 +27,7 @@ whose answer is λ itself and u = K⁻¹(f − Gᵀλ) (``formulation="dual"``; 
 
 from __future__ import annotations
 
-import contextlib
-import io
-import os
-import sys
 import time
-from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,6 +37,7 @@ from contactqp.errors import OptionError, SolverError
 from contactqp.friction.law import Law
 from contactqp.friction.model import FrictionModel
 from contactqp.friction.reduced import join
+from contactqp.progress import silenced
 
 # backends that need a positive definite Hessian: the primal has none in t
 POSITIVE_DEFINITE_ONLY = ("quadprog", "ecos")
@@ -58,28 +54,6 @@ TIGHT = {
     "ecos": {"abstol": 1e-10, "reltol": 1e-10, "feastol": 1e-10},
     "highs": {"output_flag": False},
 }
-
-
-@contextlib.contextmanager
-def silenced() -> Iterator[None]:
-    """Nothing a backend writes gets out (HiGHS's banner from C, OSQP's notes from Python):
-    file descriptors 1 and 2 and Python's streams go to the null device meanwhile. (The same
-    as the frictionless QP backends do, :mod:`contactqp.methods.qp`, which this layer may not
-    import.)"""
-    sys.stdout.flush()
-    sys.stderr.flush()
-    saved = os.dup(1), os.dup(2)
-    null = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(null, 1)
-        os.dup2(null, 2)
-        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-            yield
-    finally:
-        os.dup2(saved[0], 1)
-        os.dup2(saved[1], 2)
-        for handle in (*saved, null):
-            os.close(handle)
 
 
 @dataclass(frozen=True)

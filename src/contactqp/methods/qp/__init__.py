@@ -19,11 +19,7 @@ that pushes and one that pulls.
 
 from __future__ import annotations
 
-import contextlib
 import importlib
-import io
-import os
-import sys
 import time
 from dataclasses import dataclass, field
 from types import ModuleType
@@ -37,6 +33,7 @@ from contactqp.methods.qp.outcome import QPOutcome, failed_outcome
 from contactqp.methods.qp.problem import QPProblem, qp_from_model, qp_problem, scales
 from contactqp.methods.qp.settings import ACCURACIES, accuracy_settings
 from contactqp.model import Condensed, Model
+from contactqp.progress import silenced
 
 PIP_SOLVERS = 'pip install "contactqp[solvers]"'
 
@@ -173,45 +170,14 @@ def available_qp_solvers() -> tuple[QPSolverInfo, ...]:
     return tuple(sorted(rows, key=lambda r: not r.available))
 
 
-class _Sink(io.TextIOBase):
-    """A text stream that keeps nothing."""
-
-    def write(self, text: str) -> int:
-        return len(text)
-
-
-_SINK = _Sink()
-
-
-@contextlib.contextmanager
-def _silenced():
-    """Nothing written to standard output or error gets out: from Python (OSQP's "Polishing
-    not needed") nor from C (HiGHS's presolve notes on stderr), through file descriptors 1
-    and 2 (a few microseconds)."""
-    sys.stdout.flush()
-    sys.stderr.flush()
-    saved = os.dup(1), os.dup(2)
-    null = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(null, 1)
-        os.dup2(null, 2)
-        with contextlib.redirect_stdout(_SINK), contextlib.redirect_stderr(_SINK):
-            yield
-    finally:
-        os.dup2(saved[0], 1)
-        os.dup2(saved[1], 2)
-        for handle in (*saved, null):
-            os.close(handle)
-
-
 def guarded(solve: Any, qp: QPProblem, *args: Any, verbose: bool = False) -> QPOutcome:
     """Call a backend's solve; anything the solver raises becomes a failed outcome (the Result
     check then flags it). The library's own errors (user mistakes) pass through. Whatever the
-    solver prints goes nowhere unless ``verbose`` (:func:`_silenced`)."""
+    solver prints goes nowhere unless ``verbose`` (:func:`contactqp.progress.silenced`)."""
     try:
         if verbose:
             return solve(qp, *args)
-        with _silenced():
+        with silenced():
             return solve(qp, *args)
     except (KeyboardInterrupt, SystemExit, ContactqpError):
         raise
