@@ -205,7 +205,10 @@ def measure(model: CylinderModel, contact_force: np.ndarray,
     open_rows = np.flatnonzero(force <= max(PUSHING * force.max(), resolution))
     last = int(open_rows[0]) - 1 if open_rows.size else force.size - 1
     if last < 1:
-        raise ProblemError(f"measure: {last + 1} row pushes; refine the mesh (fine)")
+        raise ProblemError(f"measure: contact_force pushes on {last + 1} row(s) from the "
+                           "lowest point, too few to read a and p0 (largest force "
+                           f"{float(force.max(initial=0.0)):.3g}); refine the mesh (fine), or "
+                           "give the contact forces of a solve that loads the cylinder")
     if last == force.size - 1:
         raise ProblemError(f"measure: the contact reaches the zone's last row at x = "
                            f"{model.x[last]:.4g}; widen the zone")

@@ -1,0 +1,445 @@
+"""The scaling of the general path on the Hertz models: time against dofs at a fixed contact
+fraction, and time against the rows in contact at fixed dofs, in 2D and 3D (issue 39).
+
+    python benchmarks/scale.py [--quick] [--out DIR] [--cache DIR] [--sweeps dofs2d,rows3d]
+                               [--timeout S] [--budget S]
+
+Models (contactqp.fem, scikit-fem; R = 10 mm, E = 210 GPa, ν = 0.3, contact zone 0.5 mm):
+
+    dofs2d  the Hertz cylinder pushed down by δ = 10 µm (a ≈ 0.41 of the zone: the contact
+            fraction fixed) on meshes refined in fine and growth together, 10⁴ to 9·10⁵ dofs
+    dofs3d  the Hertz sphere, δ = 10 µm (a ≈ 0.63 of the zone), on the levels of
+            benchmarks/hertz3d.py, 1.3·10⁴ to 9·10⁴ dofs
+    rows2d  one cylinder mesh (6.6·10⁴ dofs, 2 044 rows), δ from 0.15 µm to 40 µm: 10² to
+            about 1 900 rows in contact
+    rows3d  one sphere mesh, δ from 1 µm to 20 µm: 10² rows in contact to most of its rows
+
+Runs on each: contactqp.solve by lagrange, penalty, augmented and qp (its default backend),
+end to end (model, method, check); and Clarabel, OSQP and PIQP called directly (through
+qpsolvers, at their default settings) on the same QP written on the free dofs, minimise
+½ xᵀK_ff x + (K_fp u_p − f_f)ᵀx subject to C_f x ≤ g − C_p u_p, timed from the Problem's
+arrays to the solver's answer; each peer's answer is then judged by the same check,
+contactqp.check(problem, u, contact_force), outside its time. Each run goes to a forked child
+stopped after TIMEOUT s; a run stopped so is not started again on the sweep's larger cases,
+and no run starts once the whole run's BUDGET is spent (each skip with its reason).
+
+The floor of each mesh: the fastest factor-and-solve of K on the free dofs available here,
+measured in the same run: SuperLU with COLAMD, SuperLU with minimum degree in symmetric mode,
+and qdldl's LDLᵀ (with AMD), where installed. Every time is also a ratio to it.
+
+Built problems are kept in the cache folder (default DIR/problems) as .npz, so a second run
+does not mesh again. Writes scale.json, table.md, time_vs_dofs.png and time_vs_rows.png to DIR
+(default benchmarks/out/scale); ``--redraw DIR/scale.json`` writes the table and the charts
+again from the data. ``--quick``: the smallest cases, under two minutes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+import contactqp
+from cases import in_child, machine
+
+TIMEOUT = {False: 60.0, True: 10.0}  # s per run (full, --quick)
+BUDGET = {False: 2400.0, True: 75.0}  # s: no run starts after this much of the whole run
+ZONE, APPROACH = 0.5, 0.01  # mm: the contact zone's (half-)width, δ
+METHODS = ("lagrange", "penalty", "augmented", "qp")
+PEERS = ("clarabel", "osqp", "piqp")
+
+
+@dataclass(frozen=True)
+class Mesh:
+    """One model's mesh: 2D (the cylinder, fine = ZONE / n) or 3D (the sphere)."""
+
+    dimension: int
+    fine: float
+    growth: float
+
+    @property
+    def key(self) -> str:
+        return f"{self.dimension}d_fine{self.fine:.6g}_growth{self.growth:.6g}"
+
+    def build(self) -> contactqp.Problem:
+        from contactqp.fem import cylinder_on_flat, sphere_on_flat
+
+        builder = cylinder_on_flat if self.dimension == 2 else sphere_on_flat
+        return builder(zone=ZONE, fine=self.fine, growth=self.growth, approach=APPROACH).problem
+
+
+@dataclass(frozen=True)
+class Case:
+    sweep: str  # dofs2d, dofs3d, rows2d, rows3d
+    mesh: Mesh
+    approach: float  # mm
+    runs_in: str  # "both", "full" or "quick": the runs it is part of
+
+
+def level(k: int) -> Mesh:
+    """The sphere of benchmarks/hertz3d.py's level k: every allowed size 2^(−k/2) level 0's."""
+    return Mesh(3, 0.1 * 2.0 ** (-k / 2), 0.6 * 2.0 ** (-k / 2))
+
+
+SMALL2D, SMALL3D = Mesh(2, ZONE / 50, 0.1), level(1)  # 8 754 and 5 106 dofs
+ROWS2D = Mesh(2, ZONE / 4000, 0.2)  # 65 894 dofs, 2 044 rows (finest at x = 0)
+ROWS2D_APPROACHES = (2e-5, 2e-4, 1.5e-3, 0.012)  # mm: 117 rows in contact at the first
+ROWS3D = Mesh(3, 0.02, 0.6)  # 16 233 dofs, 985 rows
+CASES = (
+    Case("dofs2d", SMALL2D, APPROACH, "both"),
+    *(Case("dofs2d", Mesh(2, ZONE / n, growth), APPROACH, "full")
+      for n, growth in ((160, 0.05), (640, 0.03), (2000, 0.02))),
+    Case("dofs3d", SMALL3D, APPROACH, "both"),
+    *(Case("dofs3d", level(k), APPROACH, "full") for k in (2, 3, 4)),
+    *(Case("rows2d", ROWS2D, approach, "full") for approach in ROWS2D_APPROACHES),
+    *(Case("rows3d", ROWS3D, approach, "full") for approach in (1.7e-3, 5e-3, 0.02)),
+    # --quick: the rows sweeps' logic on the small meshes, at two loads each
+    *(Case("rows2d", SMALL2D, approach, "quick") for approach in (1e-3, 0.03)),
+    *(Case("rows3d", SMALL3D, approach, "quick") for approach in (3e-3, 0.02)),
+)
+
+
+def problem_of(case: Case, cache: Path) -> contactqp.Problem:
+    """The case's problem: its mesh built once (or read from the cache), pushed by its δ."""
+    path = cache / f"{case.mesh.key}.npz"
+    if path.exists():
+        problem = contactqp.load_problem(path)
+    else:
+        problem = case.mesh.build()
+        cache.mkdir(parents=True, exist_ok=True)
+        contactqp.save_problem(problem, path)
+    # the prescribed values are 0 on the symmetry planes and −δ on the cut: scaled to this δ
+    return problem.with_values(prescribed_values=problem.prescribed_values
+                               * (case.approach / APPROACH))
+
+
+def free_dofs(problem: contactqp.Problem) -> np.ndarray:
+    return np.setdiff1d(np.arange(problem.n), problem.prescribed)
+
+
+def floors(problem: contactqp.Problem, repeats: int, limit: float) -> dict[str, float]:
+    """Each factor-and-solve of K on the free dofs available here (seconds, the median of
+    ``repeats``): SuperLU with COLAMD, SuperLU with minimum degree in symmetric mode (as
+    benchmarks/hertz.py), qdldl's LDLᵀ with AMD (its upper triangle) and CHOLMOD through
+    cvxopt where installed; one not done within ``limit`` s is left out."""
+    free = free_dofs(problem)
+    K = sp.csc_matrix(sp.csr_array(problem.K)[free][:, free])
+    rhs = np.ones(free.size)
+    candidates = {
+        "SuperLU COLAMD": lambda: spla.splu(K).solve(rhs),
+        "SuperLU MMD symmetric": lambda: spla.splu(
+            K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+            options={"SymmetricMode": True}).solve(rhs)}
+    try:
+        import qdldl
+
+        upper = sp.triu(K, format="csc")
+        candidates["qdldl LDLT"] = lambda: qdldl.Solver(upper, upper=True).solve(rhs)
+    except ImportError:
+        pass
+    try:
+        from cvxopt import cholmod, matrix, spmatrix
+
+        lower = sp.tril(K, format="coo")
+        held = spmatrix(lower.data, lower.row.tolist(), lower.col.tolist(), K.shape)
+        candidates["CHOLMOD (cvxopt)"] = lambda: cholmod_solve(cholmod, held, matrix(rhs))
+    except ImportError:
+        pass
+    found = {}
+    for name, factor_and_solve in candidates.items():
+        # each in a child stopped after the run's time limit: SuperLU at 9·10⁵ dofs takes
+        # many minutes and gigabytes, and a floor past the limit is no floor
+        seconds = in_child(limit, timed, factor_and_solve, repeats)
+        if seconds is not None:
+            found[name] = seconds
+    return found
+
+
+def timed(function: Any, repeats: int) -> float:
+    """The median wall time of ``repeats`` calls (seconds)."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def cholmod_solve(cholmod: Any, K: Any, rhs: Any) -> None:
+    """CHOLMOD's supernodal Cholesky of K (its lower triangle, AMD or METIS as CHOLMOD
+    chooses) and one solve."""
+    factor = cholmod.symbolic(K)
+    cholmod.numeric(K, factor)
+    cholmod.solve(factor, rhs)
+
+
+def reduced_qp(problem: contactqp.Problem) -> tuple[Any, ...]:
+    """The QP on the free dofs (P, q, G, h) and what lifts its x back to u."""
+    free, held = free_dofs(problem), problem.prescribed
+    K, C = sp.csr_array(problem.K), sp.csc_array(problem.C)
+    values = problem.prescribed_values
+    P = sp.csc_matrix(K[free][:, free])
+    q = K[free][:, held] @ values - problem.f[free]
+    G = sp.csc_matrix(C[:, free])
+    h = problem.g - C[:, held] @ values
+    return P, q, G, h, free
+
+
+def peer(problem: contactqp.Problem, solver: str) -> dict[str, Any]:
+    """Clarabel, OSQP or PIQP on the same QP, timed, then judged by contactqp's check."""
+    import qpsolvers
+
+    start = time.perf_counter()
+    P, q, G, h, free = reduced_qp(problem)
+    solution = qpsolvers.solve_problem(qpsolvers.Problem(P, q, G, h), solver=solver)
+    seconds = time.perf_counter() - start
+    if solution.x is None or solution.z is None:
+        return {"seconds": seconds, "verified": False, "why": f"{solver}: no answer",
+                "claimed_success": False}
+    u = np.zeros(problem.n)
+    u[free], u[problem.prescribed] = solution.x, problem.prescribed_values
+    found = {"seconds": seconds, "claimed_success": bool(solution.found),
+             "contact_force": np.asarray(solution.z)}
+    start = time.perf_counter()
+    try:
+        check = contactqp.check(problem, u, solution.z)
+    except contactqp.ContactqpError as error:  # no verdict: not verified
+        return {**found, "verified": False, "why": f"the check raised: {error}"[:200]}
+    return {**found, "check_seconds": time.perf_counter() - start,
+            "verified": bool(check.verified and check.physical), "why": check.message[:200]}
+
+
+def method(problem: contactqp.Problem, name: str) -> dict[str, Any]:
+    """contactqp.solve by one method, end to end (its check included)."""
+    start = time.perf_counter()
+    try:
+        result = contactqp.solve(problem, name)
+    except contactqp.ContactqpError as error:
+        return {"refused": str(error)[:200]}
+    return {"seconds": time.perf_counter() - start,
+            "check_seconds": result.timings.get("check", float("nan")),
+            "verified": bool(result.verified and result.physical),
+            "claimed_success": bool(result.claimed_success), "why": result.message[:200],
+            "contact_force": np.asarray(result.contact_force)}
+
+
+def run(problem: contactqp.Problem, label: str) -> dict[str, Any]:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the solvers' own warnings: the check decides
+        try:
+            return peer(problem, label) if label in PEERS else method(problem, label)
+        except Exception as error:  # noqa: BLE001 (a crash is a result here, with its reason)
+            return {"refused": f"raised {type(error).__name__}: {error}"[:200]}
+
+
+def isolated(timeout: float, problem: contactqp.Problem, label: str) -> dict[str, Any]:
+    """run() in a forked child stopped after ``timeout`` s (:func:`cases.in_child`)."""
+    try:
+        found = in_child(timeout, run, problem, label)
+    except EOFError:  # the child died without an answer (a crash in compiled code)
+        return {"refused": "the process died"}
+    return found or {"skipped": f"time limit: stopped after {timeout:.0f} s"}
+
+
+def rows_in_contact(force: np.ndarray) -> int:
+    """The rows that push: a force above 10⁻⁶ of the largest (contactqp.fem's reading)."""
+    return int(np.count_nonzero(force > 1e-6 * force.max(initial=0.0)))
+
+
+def warm_up(problem: contactqp.Problem) -> None:
+    """One call of each run on a small problem, so that no child pays a first import."""
+    for label in (*METHODS, *PEERS):
+        run(problem, label)
+    floors(problem, 1, TIMEOUT[True])
+
+
+@dataclass
+class Progress:
+    """What a run carries from case to case: the runs stopped at the time limit in each sweep
+    (not started again on its larger cases), each mesh's floors (the rows sweeps' cases share
+    a K), and the run's deadline."""
+
+    limit: float  # s: a run is stopped after this long
+    deadline: float  # time.perf_counter() past which no run starts
+    stopped: set[tuple[str, str]] = field(default_factory=set)
+    floors: dict[str, dict[str, float]] = field(default_factory=dict)
+
+    def why_skip(self, case: Case, label: str) -> str | None:
+        """Why the run is not started: it was stopped at the time limit on a smaller case of
+        the sweep, or the run's budget is spent."""
+        if (case.sweep, label) in self.stopped:
+            return "time limit: stopped on a smaller case of the sweep"
+        if time.perf_counter() > self.deadline:
+            return "the run's time budget is spent"
+        return None
+
+
+def measure_case(case: Case, problem: contactqp.Problem, progress: Progress) -> dict[str, Any]:
+    """The case's floors and one entry per run."""
+    if case.mesh.key not in progress.floors:
+        progress.floors[case.mesh.key] = floors(problem, 1 if problem.n > 2e5 else 3,
+                                                progress.limit)
+    found_floors = progress.floors[case.mesh.key]
+    base = min(found_floors.values())
+    described = {"sweep": case.sweep, "dimension": case.mesh.dimension, "dofs": problem.n,
+                 "free_dofs": int(free_dofs(problem).size), "rows": problem.m,
+                 "approach_mm": case.approach, "floors_seconds": found_floors,
+                 "floor_seconds": base, "floor": min(found_floors, key=found_floors.get)}
+    print(f"{case.sweep}: {problem.n} dofs, {problem.m} rows, δ = {case.approach * 1e3:g} µm, "
+          f"floor {base:.3f} s ({described['floor']})", flush=True)
+    runs, forces = {}, []
+    limit = progress.limit
+    for label in (*METHODS, *PEERS):
+        reason = progress.why_skip(case, label)
+        found = {"skipped": reason} if reason else isolated(limit, problem, label)
+        if "seconds" in found:
+            found["ratio"] = found["seconds"] / base
+            if found["verified"]:
+                forces.append(found["contact_force"])
+        elif "time limit" in found.get("skipped", ""):
+            progress.stopped.add((case.sweep, label))
+        found.pop("contact_force", None)
+        runs[label] = found
+        print(f"  {line(label, found)}", flush=True)
+    described["in_contact"] = rows_in_contact(forces[0]) if forces else None
+    described["runs"] = runs
+    return described
+
+
+def line(label: str, found: dict[str, Any]) -> str:
+    if "seconds" not in found:
+        return f"{label:10s} {found.get('skipped') or 'refused: ' + found['refused']}"
+    return (f"{label:10s} {found['seconds']:8.2f} s = {found['ratio']:7.2f} x floor, "
+            f"verified {found['verified']}")
+
+
+def cell(found: dict[str, Any]) -> str:
+    if "seconds" not in found:
+        reason = found.get("skipped") or "refused"
+        return ("time limit" if "time limit" in reason else "not run (budget)"
+                if "budget" in reason else reason.split(":")[0])
+    return f"{found['ratio']:.3g}×" + (" ✓" if found["verified"] else " ✗")
+
+
+def table(cases: list[dict[str, Any]]) -> str:
+    """Markdown: one line per case, each run's time over the floor and its verdict."""
+    labels = (*METHODS, *PEERS)
+    head = ("| sweep | dofs | rows | in contact | floor (s) | "
+            + " | ".join(f"{label}" for label in labels) + " |")
+    lines = [head, "|---" * (5 + len(labels)) + "|"]
+    for c in cases:
+        lines.append(f"| {c['sweep']} | {c['dofs']:,} | {c['rows']:,} | "
+                     f"{c['in_contact'] if c['in_contact'] is not None else '–'} | "
+                     f"{c['floor_seconds']:.3g} | "
+                     + " | ".join(cell(c["runs"][label]) for label in labels) + " |")
+    return ("\n".join(lines).replace(",", " ") + "\n\nEach cell: time / the floor (the fastest "
+            "factor-and-solve of K on the free dofs in the same run); ✓ verified by "
+            "contactqp's check, ✗ not verified. contactqp's methods end to end with their "
+            "check; Clarabel, OSQP and PIQP from the Problem's arrays to their answer, the "
+            "check apart.\n")
+
+
+COLOURS = {"lagrange": "tab:blue", "penalty": "tab:orange", "augmented": "tab:green",
+           "qp": "tab:purple", "clarabel": "tab:red", "osqp": "tab:brown", "piqp": "tab:gray"}
+
+
+def chart(cases: list[dict[str, Any]], kind: str, path: Path) -> None:
+    """Seconds against dofs (kind "dofs") or rows in contact ("rows"), log–log, 2D and 3D
+    side by side; filled: verified, hollow: not verified; the floor as a black line."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(12.0, 4.4), layout="constrained")
+    axes = figure.subplots(1, 2)
+    for ax, dimension in zip(axes, (2, 3)):
+        chosen = [c for c in cases if c["sweep"] == f"{kind}{dimension}d"
+                  and (kind == "dofs" or c["in_contact"])]
+        x = [c["dofs"] if kind == "dofs" else c["in_contact"] for c in chosen]
+        if not chosen:  # a sweep not run
+            ax.axis("off")
+            continue
+        for label, colour in COLOURS.items():
+            points = [(xi, c["runs"][label]) for xi, c in zip(x, chosen)
+                      if "seconds" in c["runs"][label]]
+            if not points:
+                continue
+            ax.plot([p[0] for p in points], [p[1]["seconds"] for p in points], "-",
+                    color=colour, lw=1.0, label=label)
+            for xi, found in points:
+                ax.scatter(xi, found["seconds"], s=30, edgecolors=colour, linewidths=1.2,
+                           facecolors=colour if found["verified"] else "none", zorder=3)
+        ax.plot(x, [c["floor_seconds"] for c in chosen], "ks-", lw=2.0, ms=4, label="floor")
+        ax.set(xscale="log", yscale="log", ylabel="seconds (log)",
+               xlabel="dofs" if kind == "dofs" else "rows in contact")
+        body = "cylinder" if dimension == 2 else "sphere"
+        ax.set_title(f"{dimension}D Hertz {body}: " + (
+            "time against dofs, contact fraction fixed" if kind == "dofs" else
+            f"time against rows in contact, {chosen[0]['dofs']:,} dofs"), fontsize=9.5)
+        ax.grid(True, which="both", lw=0.3, alpha=0.5)
+    named = {}
+    for ax in axes:
+        named.update(zip(*reversed(ax.get_legend_handles_labels())))
+    figure.legend(named.values(), named.keys(), loc="outside right upper", fontsize=8,
+                  title="filled: verified\nhollow: not", title_fontsize=8)
+    figure.savefig(path, dpi=110)
+
+
+def write(cases: list[dict[str, Any]], out: Path) -> None:
+    """table.md, time_vs_dofs.png and time_vs_rows.png of the cases, in ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "table.md").write_text(table(cases))
+    for kind in ("dofs", "rows"):
+        chart(cases, kind, out / f"time_vs_{kind}.png")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="the smallest cases (< 2 min)")
+    parser.add_argument("--out", default="benchmarks/out/scale", help="output folder")
+    parser.add_argument("--cache", default="", help="built problems (default OUT/problems)")
+    parser.add_argument("--sweeps", default="dofs2d,dofs3d,rows2d,rows3d")
+    parser.add_argument("--timeout", type=float, default=0.0,
+                        help=f"s per run (default {TIMEOUT[False]:g}, --quick {TIMEOUT[True]:g})")
+    parser.add_argument("--redraw", default="",
+                        help="write the table and charts of this scale.json to OUT, and stop")
+    parser.add_argument("--budget", type=float, default=0.0,
+                        help=f"s for the whole run (default {BUDGET[False]:g}, --quick "
+                             f"{BUDGET[True]:g}): no run starts after it")
+    args = parser.parse_args()
+    out = Path(args.out)
+    if args.redraw:
+        write(json.loads(Path(args.redraw).read_text())["cases"], out)
+        return
+    limit = args.timeout or TIMEOUT[args.quick]
+    budget = args.budget or BUDGET[args.quick]
+    cache = Path(args.cache) if args.cache else out / "problems"
+    sweeps = args.sweeps.split(",")
+    start = time.perf_counter()
+    wanted = ("both", "quick" if args.quick else "full")
+    chosen = [c for c in CASES if c.sweep in sweeps and c.runs_in in wanted]
+    warm_up(problem_of(CASES[0], cache))
+    progress = Progress(limit, start + budget)
+    cases = [measure_case(c, problem_of(c, cache), progress) for c in chosen]
+    out.mkdir(parents=True, exist_ok=True)
+    document = {"machine": machine(), "quick": args.quick, "timeout_seconds": limit,
+                "budget_seconds": budget, "cases": cases}
+    (out / "scale.json").write_text(json.dumps(document, indent=1))
+    write(cases, out)
+    print(table(cases))
+    print(f"{len(cases)} cases in {time.perf_counter() - start:.0f} s; written: {out}/scale.json, "
+          "table.md, time_vs_dofs.png, time_vs_rows.png")
+
+
+if __name__ == "__main__":
+    main()
