@@ -261,8 +261,20 @@ def test_a_singular_K_that_contact_holds_is_solved(method):
     assert result.contact_force[0] == pytest.approx(1.0, abs=1e-9)
 
 
-@pytest.mark.parametrize("method", ["penalty", "augmented", "lemke", "pgs",
-                                    "semismooth_newton"])
+@pytest.mark.parametrize("method", ["penalty", "augmented"])
+def test_the_penalty_methods_hold_a_K_held_by_contact_alone_as_lagrange_does(method):
+    """A free spring pushed by 1 onto a row u₀ <= 0.5: the row takes the whole load (λ = 1)
+    and the spring moves rigidly to it, u = (0.5, 0.5) by hand; the sparse penalty and
+    augmented Lagrangian once refused it as singular (each set is now pinned so that it holds
+    the free mode, as Lagrange's is)."""
+    result = contactqp.solve(contactqp.Problem([[1.0, -1.0], [-1.0, 1.0]], [1.0, 0.0],
+                                               [[1.0, 0.0]], [0.5]), method)
+    assert result.verified, result.message
+    np.testing.assert_allclose(result.u, [0.5, 0.5], atol=1e-5 * result.displacement_scale)
+    assert result.contact_force[0] == pytest.approx(1.0, abs=1e-5 * result.force_scale)
+
+
+@pytest.mark.parametrize("method", ["lemke", "pgs", "semismooth_newton"])
 def test_methods_that_need_K_inverse_refuse_a_K_held_by_contact_alone_in_one_line(method):
     with pytest.raises(SolverError) as raised:
         contactqp.solve(contactqp.Problem([[1.0, -1.0], [-1.0, 1.0]], [1.0, 0.0],
@@ -645,3 +657,24 @@ def test_a_problem_with_no_contact_rows_is_k_inverse_f_by_every_method(method):
     result = contactqp.solve(problem, method)
     assert result.verified and result.contact_force.size == 0
     np.testing.assert_allclose(result.u, [1.0, 2.0], rtol=1e-12)
+
+
+@pytest.mark.parametrize(("backend", "solver"), [("clarabel", None), ("osqp", None)])
+def test_a_force_carried_round_a_zero_gap_loop_is_judged_on_what_the_rows_put_on_the_dofs(
+        backend, solver):
+    """Rows u₀ − u₁ ≤ 0, u₁ − u₂ ≤ 0, u₂ − u₀ ≤ 0 add up to 0·u ≤ 0: any force carried round
+    the loop moves nothing, so the exact answer fixes only Cᵀλ. Here f = (1, 0, −1) is taken
+    by the loop whole (u = 0, Cᵀλ = f, by hand); Clarabel carries 1.23 more round it, which
+    the check once flagged (the reference's set had dropped the row its least-norm forces
+    pulled on)."""
+    K = np.eye(3) + np.array([[1.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
+    C = np.array([[1.0, -1.0, 0.0], [0.0, 1.0, -1.0], [-1.0, 0.0, 1.0]])
+    f = np.array([1.0, 0.0, -1.0])
+    problem = contactqp.Problem(K, f, C, np.zeros(3))
+    options = {"backend": backend} if solver is None else {"backend": backend, "solver": solver}
+    result = contactqp.solve(problem, "qp", **options)
+    assert result.verified, result.message
+    F, U = result.force_scale, result.displacement_scale
+    assert np.abs(result.u).max() <= contactqp.GUARANTEE[1] * U
+    assert np.abs(C.T @ result.contact_force - f).max() <= contactqp.GUARANTEE[0] * F
+    assert result.contact_force.min() >= -contactqp.GUARANTEE[0] * F
