@@ -83,7 +83,7 @@ def tiled_rows(values: np.ndarray, walls: int) -> np.ndarray:
 
 
 def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
-                gaps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                gaps: np.ndarray, single: Model | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(F, U) of every case of a tiled model, by the one rule of
     :mod:`contactqp.model.base` (``free_displacement`` per case: cases x free nodes; ``gaps``
     cases x rows), each term reduced over the case's own entries; and the tiled model's own F
@@ -94,8 +94,14 @@ def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
     largest = partial(many.row_reduce, np.maximum, initial=0.0)  # each case's largest
     u0 = model.full_displacements(free_displacement.ravel())
     passed = np.maximum(penetration(layout, u0), 0.0)
+    if single is not None:  # every case's rows see its K: the case's own row stiffness
+        model.__dict__["row_stiffness"] = tiled_rows(
+            np.tile(single.row_stiffness, (cases, 1)), walls)
     weighted = passed * model.row_stiffness
-    moved = model.solve_K(model.C.T @ weighted)  # K⁻¹Cᵀ(Sp): the cases do not couple
+    # K⁻¹Cᵀ(Sp): the cases do not couple, and each has the case's K (one solve, every column)
+    rhs = (model.C.T @ weighted).reshape(cases, -1)
+    moved = (single.solve_K(rhs.T).T if single is not None else model.solve_K(rhs.ravel())
+             ).ravel()
     flex = (model.C.T @ weighted * moved).reshape(cases, -1).sum(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         mu = np.where(flex > 0.0, per_case_rows(passed * weighted, walls, cases).sum(axis=1)
@@ -108,18 +114,16 @@ def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
              "passed": largest(per_case_rows(passed, walls, cases)),
              "widest": largest(gaps), "size": float(layout.longest_bar),
              "softest": float(model.band[0].min(initial=np.inf)) if model.band.size else 0.0}
-    U = np.array([displacement_scale(_case_terms(terms, c)) for c in range(cases)])
-    F = np.array([force_scale(_case_terms(terms, c), U[c]) for c in range(cases)])
+    # the rule on every case at once (its terms as arrays, one entry per case)
+    per_case = ScaleTerms(**{k: np.broadcast_to(np.asarray(v, dtype=float), (cases,))
+                             for k, v in terms.items()})
+    U = np.asarray(displacement_scale(per_case), dtype=float).reshape(cases)
+    F = np.asarray(force_scale(per_case, U), dtype=float).reshape(cases)
     whole = ScaleTerms(**{k: float(np.max(v)) for k, v in terms.items()})
     model.__dict__["_terms"] = whole
     model.__dict__["displacement_scale"] = U_all = float(displacement_scale(whole))
     model.__dict__["force_scale"] = float(force_scale(whole, U_all))
     return F, U
-
-
-def _case_terms(terms: dict[str, Any], case: int) -> ScaleTerms:
-    return ScaleTerms(**{k: float(v[case]) if np.ndim(v) else float(v)
-                         for k, v in terms.items()})
 
 
 @dataclass(frozen=True, eq=False)
@@ -210,7 +214,7 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
                         "solved with the batch")
     # the tiled answer checked as one scene, without a natural map over every case's rows
     # (each case's is read from its rows) and without the stresses a Batch does not hold
-    F, U = case_scales(model, cases, solved.free_displacement, gap_cases)
+    F, U = case_scales(model, cases, solved.free_displacement, gap_cases, prepared.model)
     together = checked(model, solution, prepared.contact, natural=False)
     lam = solved.contact_force
     residuals, names = _case_residuals(prepared, together, solved, gap_cases, F, U)

@@ -87,25 +87,30 @@ class ScaleTerms:
 ROUND_OFF_LENGTH = 1e-12  # of the largest force over the softest stiffness: round-off of u₀
 
 
-def displacement_scale(terms: ScaleTerms) -> float:
+def displacement_scale(terms: ScaleTerms) -> Any:
     """U by its rule (module docstring); ‖u₀‖∞ and how far it passes a row count where they
     are more than the round-off of u₀, ROUND_OFF_LENGTH of the largest force term over the
     softest stiffness (a floating body's balanced loads leave u₀ = 1e-38 m on one front end,
-    0 on the other)."""
-    force = max(terms.loads, terms.reactions, terms.contact, terms.unbalanced)
-    noise = ROUND_OFF_LENGTH * force / terms.softest if terms.softest > 0.0 else 0.0
-    scale = max(terms.free, terms.passed)
-    if scale > noise:
-        return scale
-    return terms.widest if terms.widest > 0.0 else (terms.size if terms.size > 0.0 else 1.0)
+    0 on the other). Terms may be arrays (one entry per case of a batch): U is then one."""
+    force = np.maximum.reduce([terms.loads, terms.reactions, terms.contact, terms.unbalanced])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        noise = np.where(np.greater(terms.softest, 0.0),
+                         ROUND_OFF_LENGTH * force / terms.softest, 0.0)
+    scale = np.maximum(terms.free, terms.passed)
+    fallback = np.where(np.greater(terms.widest, 0.0), terms.widest,
+                        np.where(np.greater(terms.size, 0.0), terms.size, 1.0))
+    return _scalar(np.where(scale > noise, scale, fallback))
 
 
-def force_scale(terms: ScaleTerms, U: float) -> float:
-    """F by its rule (module docstring)."""
-    scale = max(terms.loads, terms.reactions, terms.contact, terms.unbalanced)
-    if scale > 0.0:
-        return scale
-    return terms.softest * U if terms.softest > 0.0 else 1.0
+def force_scale(terms: ScaleTerms, U: Any) -> Any:
+    """F by its rule (module docstring); terms and U may be arrays, as for U."""
+    scale = np.maximum.reduce([terms.loads, terms.reactions, terms.contact, terms.unbalanced])
+    fallback = np.where(np.greater(terms.softest, 0.0), np.multiply(terms.softest, U), 1.0)
+    return _scalar(np.where(scale > 0.0, scale, fallback))
+
+
+def _scalar(value: np.ndarray) -> Any:
+    return float(value) if np.ndim(value) == 0 else value
 
 
 def row_stiffness(K: sp.sparray, C: sp.csr_array) -> np.ndarray:

@@ -71,13 +71,11 @@ class Model(ContactModel):
         model = Model(layout, self.free, self.band, free_loads(layout), self.C, layout.rows.gap)
         # what K and the supports decide, worked out here once for every model made from this
         # one (a prepared scene's solves), and K itself if made; never P or g
-        kept = ["floating", "determinate", "stiffest"]
+        kept = ["floating", "determinate", "stiffest", "K", "row_stiffness"]
         if self.determinate is not None:
             kept.append("compliance_to_support")
         for name in kept:
             model.__dict__[name] = getattr(self, name)
-        if "K" in self.__dict__:
-            model.__dict__["K"] = self.K
         return model
 
     @cached_property
