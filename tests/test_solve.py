@@ -395,7 +395,12 @@ def test_every_method_gives_the_same_physical_answer_in_both_unit_systems(seed):
         assert in_mm.displacement_scale == pytest.approx(1e3 * si.displacement_scale, rel=1e-6)
         # each bound is an estimate, held to 5 times itself (test_guarantee); augmented,
         # seed 147999025: u 1.52e-13 apart against bounds summing to 1.36e-13
-        assert np.abs(in_mm.contact_force - si.contact_force).max(initial=0.0) <= (
+        # row by row, or on the nodes where rows repeat a constraint (PIQP, seed 389698: 7.4e9 N
+        # carried round a clamp of two walls in both unit systems, 3e-3 N apart on its rows,
+        # the same on every node; the check judges such a split on Cᵀλ)
+        apart = in_mm.contact_force - si.contact_force
+        assert min(np.abs(apart).max(initial=0.0), np.abs(contact_forces_on_nodes(
+            si.model.layout, apart)).max(initial=0.0)) <= (
             5.0 * (si.force_error_bound + in_mm.force_error_bound) + 1e-12 * si.force_scale)
         assert np.abs(in_mm.u / 1e3 - si.u).max() <= (
             5.0 * (si.displacement_error_bound + in_mm.displacement_error_bound / 1e3)
