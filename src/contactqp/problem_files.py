@@ -126,8 +126,12 @@ def _write(problem: Problem, path: Path) -> Path:
 
     path.mkdir(parents=True, exist_ok=True)
     for file, value in zip(MATRIX_MARKET, (problem.K, problem.f, problem.C, problem.g)):
-        scipy.io.mmwrite(path / file, sp.coo_matrix(value) if sp.issparse(value)
-                         else np.asarray(value).reshape(-1, 1), precision=17)
+        # an empty vector goes as a coordinate file: scipy 1.16's writer of an empty dense
+        # array never returns (its threads wait on each other; fixed in later releases)
+        dense = not sp.issparse(value) and np.size(value) > 0
+        scipy.io.mmwrite(path / file, np.asarray(value).reshape(-1, 1) if dense
+                         else sp.coo_matrix(value if sp.issparse(value) else (0, 1)),
+                         precision=17)
     if problem.T is not None:
         scipy.io.mmwrite(path / "T.mtx", sp.coo_matrix(problem.T), precision=17)
     elif (path / "T.mtx").exists():  # a folder written before, with friction: not this one's
