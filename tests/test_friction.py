@@ -10,6 +10,7 @@ bounds, μ Coulomb's coefficients, λ_N normal forces (acting as −Cᵀλ_N), �
 from __future__ import annotations
 
 import functools
+import importlib.util
 import itertools
 from fractions import Fraction
 
@@ -364,8 +365,10 @@ def test_residuals_report_a_friction_force_past_its_bound():
     (lambda m: solve_tresca(m, 1.0, method="nope"), "method: 'nope' unknown"),
     (lambda m: solve_tresca(m, 1.0, method="osqp", options={"formulation": "x"}),
      "formulation: 'x'"),
-    (lambda m: solve_tresca(m, 1.0, method="quadprog", options={"formulation": "primal"}),
-     "quadprog needs a positive definite Hessian"),
+    pytest.param(
+        lambda m: solve_tresca(m, 1.0, method="quadprog", options={"formulation": "primal"}),
+        "quadprog needs a positive definite Hessian", marks=pytest.mark.skipif(
+            importlib.util.find_spec("quadprog") is None, reason="quadprog is not installed")),
     (lambda m: solve_coulomb(m, 0.3, method="clarabel"), "unknown for Coulomb"),
     (lambda m: solve_tresca(m, 1.0, options={"tolerance": 1}), "unknown for 'active_set'"),
     (lambda m: solve_tresca(m, 1.0, previous_u=np.zeros(3)), "previous_u: shape (3,)"),

@@ -224,6 +224,7 @@ def _called(init: Any) -> Any:
             raise ProblemError(f"Problem: {error} (its fields: {fields})".replace(
                 "__init__() ", "")) from None
         init(self, *args, **kwargs)
+    checked.__module__, checked.__qualname__ = __name__, "Problem.__init__"  # for the docs
     return checked
 
 
