@@ -206,6 +206,7 @@ def test_cattaneo_mindlin_two_cylinders_stick_zone_and_traction():
     within 0.13 % of its peak for |x| ≤ 0.9c. Asserted: |c − c_Cattaneo| ≤ h (the reading's
     h/2 and as much again for the mesh) and q within 1 % of its peak (the goal at 10⁵ dofs
     is 3 %; docs/friction.md has those numbers)."""
+    pytest.importorskip("skfem", reason='scikit-fem is not installed (pip install "contactqp[fem]")')
     from contactqp.friction.cattaneo import cattaneo_cylinders
 
     R, E, nu, mu = 10.0, 210e3, 0.3, 0.3
