@@ -134,14 +134,11 @@ def test_every_method_on_both_front_ends(scene_and_exact, method, front):
         assert np.abs(result.u - exact.displacement).max() <= contactqp.GUARANTEE[1] * U
 
 
-@pytest.mark.xfail(strict=True, reason="known gap (closing note of 2026-11-27): the general "
-                   "certificate finds no reference on the chain's own set solve where the "
-                   "sparse model's finds one, so this qp answer is verified as a problem "
-                   "(7.5e-6 F) and not as a scene (the chain's 1.5e-5 F)")
 def test_never_looser_on_a_chain_seed_41339():
-    """Found by fresh seeds of the test above: the one case where the scene's verdict is
-    looser than its problem's. The route: work the general certificate out on the scene's
-    problem (its sparse model) where the chain's own set solve finds no reference."""
+    """Found by fresh seeds of the test above: the chain's own set solve found no reference
+    for this qp answer where the sparse model's found one, so it was verified as a problem
+    (7.5e-6 F) and not as a scene (the chain's 1.5e-5 F); the check now works the general
+    certificate out on the scene's problem there."""
     scene = random_scene(np.random.default_rng(41339), floating=0.0)
     result = solved(scene, "qp", {})
     as_problem = contactqp.check(contactqp.problem_from_scene(scene), result.u,
