@@ -173,3 +173,51 @@ def test_a_scene_keeps_its_model_and_a_second_solve_is_a_fresh_one_bit_for_bit(m
         assert again.residuals == fresh.residuals, seed
         assert (again.verified, again.force_error_bound, again.displacement_error_bound) == (
             fresh.verified, fresh.force_error_bound, fresh.displacement_error_bound), seed
+
+
+@pytest.mark.parametrize("block", [1, 2, 3, 131072])
+@pytest.mark.parametrize("floating", [0.0, 0.5])
+@pytest.mark.parametrize("seed", range(8))
+def test_the_checks_imbalance_is_k_u_minus_p_plus_c_transpose_lambda(seed, floating, block,
+                                                                     monkeypatch):
+    """The check's equilibrium term on a chain (Model.largest_imbalance, from K's band or from
+    the element forces, in blocks) against the sparse product K u − P + Cᵀλ, on random scenes
+    (floating bars and bar contacts included), their exact answers and random ones."""
+    import contactqp.model.chain.model as chain_model
+    from contactqp.model import element_forces, link_forces, scene_model
+    from contactqp.random_scenes import random_scene
+
+    monkeypatch.setattr(chain_model, "IMBALANCE_BLOCK", block)
+    rng = np.random.default_rng(seed)
+    model = scene_model(random_scene(rng, floating=floating))  # seed 0, 0.5: a row's
+    # indices unsorted (a bar contact's two nodes)
+    scene = model.layout.scene
+    solved = contactqp.solve(scene, "lagrange")  # balanced: a wrong entry stands out
+    answers = [(model.free_part(solved.u), solved.contact_force),
+               (rng.standard_normal(model.n_free) / model.band[0].max(),
+                rng.standard_normal(model.n_contacts) * max(np.abs(model.P).max(initial=0), 1))]
+    for u_free, lam in answers:
+        exact = np.abs(model.K @ u_free - model.P + model.C.T @ lam).max(initial=0.0)
+        u = model.full_displacements(u_free)
+        links = link_forces(model.layout, element_forces(model.layout, u))
+        assert np.array_equal(model.free_part(u), u_free)
+        size = max(np.abs(lam).max(initial=0.0), np.abs(model.P).max(initial=0.0), 1.0)
+        for found in (model.largest_imbalance(u_free, lam),
+                      model.largest_imbalance(u_free, lam, links)):
+            assert found == pytest.approx(exact, rel=1e-12, abs=1e-9 * size)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_a_chains_row_stiffness_from_its_band_is_the_sparse_products(seed):
+    """Model.row_stiffness (from K's band, the rows' one or two nodes) against
+    c_iᵀK c_i / (c_iᵀc_i)² by sparse products, on random scenes with bar contacts."""
+    from contactqp.model import scene_model
+    from contactqp.model.base import row_stiffness
+    from contactqp.random_scenes import random_scene
+
+    model = scene_model(random_scene(np.random.default_rng(seed), floating=0.5 * (seed % 2)))
+    exact = row_stiffness(model.K, model.C)
+    np.testing.assert_allclose(model.row_stiffness, exact, rtol=1e-13, atol=0.0)
+    columns, place = model._contact_columns
+    np.testing.assert_array_equal(columns[place], model._entries[1])
+    np.testing.assert_array_equal(columns, np.unique(model._entries[1]))

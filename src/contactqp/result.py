@@ -375,9 +375,11 @@ def checked(model: ContactModel, solution: Solution, contact: str,
     links = link_forces(layout, forces)
     reactions = support_reactions(layout, links, lam)
     model, u, lam, reactions = sized(model, u, lam, reactions)
-    found = check_model(model, u[model.free], lam, contact, tolerances, natural=natural,
+    u_free = model.free_part(u)
+    found = check_model(model, u_free, lam, contact, tolerances, natural=natural,
                         chain=lambda: chain_bounds(model, u, lam, reactions, contact,
-                                                   tolerances, forces, links))
+                                                   tolerances, forces, links),
+                        imbalance=model.largest_imbalance(u_free, lam, links))
     pen = penetration(layout, u) if found.penetration is None else found.penetration
     return Checked(u, lam, forces, reactions, pen, found)
 

@@ -47,17 +47,18 @@ ChainBounds = Callable[[], tuple[float, float]]
 
 def check_model(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, contact: str,
                 tolerances: Tolerances = TOLERANCES, *, chain: ChainBounds | None = None,
-                natural: bool = True) -> Check:
+                natural: bool = True, imbalance: float | None = None) -> Check:
     """Check an answer (free-dof displacements, one force per row) against a model (module
     docstring); ``contact="equality"`` holds every row on its gap. ``chain``: the chain's
     own certificate, a function giving its (force, displacement) bounds. ``natural``: work out
-    the natural-map residual (a batch reads it case by case)."""
+    the natural-map residual (a batch reads it case by case). ``imbalance``: max |K u − P +
+    Cᵀλ| where the caller has it (the model's :meth:`largest_imbalance` otherwise)."""
     equality = model.equality | (contact == "equality")
     u_free = np.asarray(u_free, dtype=float).reshape(-1)
     lam = np.asarray(lam, dtype=float).reshape(-1)
     if not (np.isfinite(u_free).all() and np.isfinite(lam).all()):
         return not_finite(model, equality, lam)
-    found, pen = residuals(model, u_free, lam, equality)
+    found, pen = residuals(model, u_free, lam, equality, imbalance)
     found["natural_map"] = (natural_residual(model, lam, pen, equality) if natural
                             else None if equality.any() or model.singular else np.nan)
     passing = all(value is None or value <= getattr(tolerances, name)
@@ -125,13 +126,13 @@ def check(model: Any, u: Any, contact_force: Any, reactions: Any = None,
         if not np.isfinite(reactions).all():
             return not_finite(model, model.equality | (contact == "equality"), lam)
         found = check_model(
-            model, u[model.free], lam, contact, tolerances,
+            model, model.free_part(u), lam, contact, tolerances,
             chain=lambda: chain_bounds(model, u, lam, reactions, contact, tolerances))
         return found
     model = as_sparse_model(frictionless(model, "contactqp.check"))
     u = _sized("u", u, model.problem.n)
     lam = _sized("contact_force", contact_force, model.n_contacts)
-    found = check_model(model, u[model.free], lam, contact, tolerances)
+    found = check_model(model, model.free_part(u), lam, contact, tolerances)
     # what the answer holds at the prescribed dofs, and the reactions it says they give
     moved = float(np.abs(u[model.problem.prescribed] - model.problem.prescribed_values).max(
         initial=0.0))

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from contactqp.model.base import ContactModel, natural_map
+from contactqp.model.base import ContactModel, natural_top
 
 
 @dataclass(frozen=True)
@@ -95,24 +95,31 @@ ORDER = ("equilibrium", "feasibility", "complementarity", "sign", "force", "disp
          "natural_map")
 
 
-def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality: np.ndarray
-              ) -> tuple[dict[str, float | None], np.ndarray]:
+def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality: np.ndarray,
+              imbalance: float | None = None) -> tuple[dict[str, float | None], np.ndarray]:
     """(the residuals of the module docstring but force and displacement, the penetration)
-    of an answer (free-dof displacements, one force per row); ``equality`` per row."""
+    of an answer (free-dof displacements, one force per row); ``equality`` per row.
+    ``imbalance``: max |K u − P + Cᵀλ| where the caller has worked it out (a chain, from the
+    element forces it has)."""
     F = model.force_scale
-    pen = model.C @ u_free - model.g
-    unilateral = ~equality
-    balance = model.imbalance(u_free, lam)
-    past = np.where(equality, np.abs(pen), np.maximum(pen, 0.0))
-    standing = np.where(unilateral, np.maximum(-pen, 0.0), 0.0)
-    s = _stiffness(model, past, standing, lam, F)
-    passed = past * s
-    both = np.minimum(np.maximum(lam, 0.0), standing * s)
+    pen = model.C_times(u_free) - model.g
+    pushing = np.maximum(lam, 0.0)
+    if equality.any():
+        unilateral = ~equality
+        past = np.where(equality, np.abs(pen), np.maximum(pen, 0.0))
+        standing = np.where(unilateral, np.maximum(-pen, 0.0), 0.0)
+        pulling = -lam[unilateral]
+    else:  # every row unilateral (a scene's, most problems'): no masks, fewer passes
+        past, standing, pulling = np.maximum(pen, 0.0), np.maximum(-pen, 0.0), -lam
+    s = _stiffness(model, past, standing, pushing, F)
+    passed = np.multiply(past, s, out=past)
+    both = np.minimum(pushing, np.multiply(standing, s, out=standing), out=pushing)
     found: dict[str, float | None] = {
-        "equilibrium": float(np.abs(balance).max(initial=0.0)) / F,
-        "feasibility": float(np.nan_to_num(passed, nan=0.0).max(initial=0.0)) / F,
-        "complementarity": float(np.nan_to_num(both[unilateral], nan=0.0).max(initial=0.0)) / F,
-        "sign": float(np.maximum(-lam[unilateral], 0.0).max(initial=0.0)) / F}
+        "equilibrium": (model.largest_imbalance(u_free, lam) if imbalance is None
+                        else imbalance) / F,
+        "feasibility": float(np.fmax.reduce(passed, initial=0.0)) / F,  # 0·∞ counts 0
+        "complementarity": float(np.fmax.reduce(both, initial=0.0)) / F,  # 0 on equalities
+        "sign": float(pulling.max(initial=0.0)) / F}
     if equality.all():
         found["complementarity"] = found["sign"] = None
     return found, pen
@@ -121,13 +128,13 @@ def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality
 SIGNIFICANT = 1e-9  # of F: a row whose residual s̄ puts below this needs no solve for its s
 
 
-def _stiffness(model: ContactModel, past: np.ndarray, standing: np.ndarray, lam: np.ndarray,
-               F: float) -> np.ndarray:
+def _stiffness(model: ContactModel, past: np.ndarray, standing: np.ndarray,
+               pushing: np.ndarray, F: float) -> np.ndarray:
     """Per row, the stiffness it sees, 1/W_ii (:meth:`~contactqp.model.base.ContactModel.
     seen_stiffness`), where the residuals read it above SIGNIFICANT of F with the bound s̄
     (which is never smaller); s̄ elsewhere, where it makes no residual that counts."""
     bound = model.row_stiffness
-    reach = np.maximum(past * bound, np.minimum(np.maximum(lam, 0.0), standing * bound))
+    reach = np.maximum(past * bound, np.minimum(pushing, standing * bound))
     rows = np.flatnonzero(~(reach <= SIGNIFICANT * F))  # NaN rows too: the solve says what
     if not rows.size:
         return bound
@@ -142,10 +149,7 @@ def natural_residual(model: ContactModel, lam: np.ndarray, pen: np.ndarray,
     where rows are equalities or K leaves a mode free: the LCP needs K⁻¹)."""
     if equality.any() or model.singular:
         return None
-    free_gaps = model.g - model.C @ model.free_displacement
-    with np.errstate(divide="ignore"):
-        roots = 1.0 / np.sqrt(model.row_stiffness)
-    return float(natural_map(lam, -pen, free_gaps, roots))
+    return float(natural_top(lam, -pen, model.row_roots)) / model.free_gap_size
 
 
 def verdict(model: ContactModel, found: dict[str, float | None], lam: np.ndarray,

@@ -99,10 +99,11 @@ def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
             np.tile(single.row_stiffness, (cases, 1)), walls)
     weighted = passed * model.row_stiffness
     # K⁻¹Cᵀ(Sp): the cases do not couple, and each has the case's K (one solve, every column)
-    rhs = (model.C.T @ weighted).reshape(cases, -1)
+    push = model.C_transpose_times(weighted)
+    rhs = push.reshape(cases, -1)
     moved = (single.solve_K(rhs.T).T if single is not None else model.solve_K(rhs.ravel())
              ).ravel()
-    flex = (model.C.T @ weighted * moved).reshape(cases, -1).sum(axis=1)
+    flex = (push * moved).reshape(cases, -1).sum(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         mu = np.where(flex > 0.0, per_case_rows(passed * weighted, walls, cases).sum(axis=1)
                       / flex, 0.0)

@@ -10,7 +10,11 @@ with the answer's contact forces λ (one per row, positive when the row pushes: 
 −Cᵀλ). It offers
 
 - its algebra: ``n_free``, ``n_contacts``, ``K`` (sparse, free x free), ``P``, ``C`` (CSR),
-  ``g``, ``equality`` (per row), ``row_names``, ``floating`` (modes K leaves free);
+  ``g``, ``equality`` (per row), ``row_names``, ``floating`` (modes K leaves free); the
+  products the check reads on every answer, each a model may work out its own fast way:
+  ``C_times`` (C u), ``C_transpose_times`` (Cᵀλ), ``largest_imbalance`` (max |K u − P +
+  Cᵀλ|: a chain in blocks from its band or its element forces), ``free_part`` (u at the free
+  dofs, a view where they are one run);
 - its solves: ``solve_K`` (K⁻¹), ``free_displacement`` (K⁻¹P), ``set_solve`` (the exact
   answer with a set of rows held on their gaps, and its corrections);
 - what it is in the user's words: ``full_displacements`` (every dof), ``reactions`` (the
@@ -113,6 +117,13 @@ def _scalar(value: np.ndarray) -> Any:
     return float(value) if np.ndim(value) == 0 else value
 
 
+# the default penalties, each this many times a row's s̄ (:func:`row_stiffness`): the penalty
+# method's (contactqp.methods.penalty, contactqp.friction.penalty) and the augmented
+# Lagrangian's (contactqp.methods.augmented, contactqp.friction.penalty)
+PENALTY_PER_STIFFNESS = 1e6
+AUGMENTED_PER_STIFFNESS = 100.0
+
+
 def row_stiffness(K: sp.sparray, C: sp.csr_array) -> np.ndarray:
     """Per row, c_iᵀ K c_i / (c_iᵀ c_i)² (module docstring), read-only."""
     squared = np.asarray(C.multiply(C).sum(axis=1)).reshape(-1)
@@ -189,7 +200,7 @@ def natural_top(forces: np.ndarray, gaps: np.ndarray, roots: np.ndarray | None,
         forces, gaps = forces * roots, np.divide(gaps, roots, out=gaps if own_gaps else None)
     with np.errstate(invalid="ignore"):  # in the scaled forces' array when there is one
         top = np.minimum(forces, gaps, out=forces if scaled else None)
-        return np.nanmax(np.abs(top, out=top), axis=-1, initial=0.0)
+        return np.fmax.reduce(np.abs(top, out=top), axis=-1, initial=0.0)  # NaN rows: none
 
 
 def natural_size(free: np.ndarray, roots: np.ndarray | None) -> np.ndarray:
@@ -197,7 +208,7 @@ def natural_size(free: np.ndarray, roots: np.ndarray | None) -> np.ndarray:
     if roots is not None:
         free = free / roots
     with np.errstate(invalid="ignore"):
-        size = np.nanmax(np.abs(free), axis=-1, initial=0.0)
+        size = np.fmax.reduce(np.abs(free), axis=-1, initial=0.0)
     return np.where(size > 0.0, size, 1.0)
 
 
@@ -208,6 +219,7 @@ class ContactModel(ABC):
     here, once, from their terms."""
 
     K: sp.sparray  # the stiffness over the free dofs
+    free: np.ndarray  # the free dofs' numbers among all the model's dofs, ascending
     P: np.ndarray
     C: sp.csr_array
     g: np.ndarray
@@ -244,7 +256,62 @@ class ContactModel(ABC):
 
     def imbalance(self, u_free: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
         """K u − P + Cᵀλ over the free dofs: what an answer leaves out of balance."""
-        return self.K @ u_free - self.P + self.C.T @ contact_force
+        out = self.K @ u_free - self.P
+        out += self.C_transpose_times(contact_force)
+        return out
+
+    def largest_imbalance(self, u_free: np.ndarray, contact_force: np.ndarray) -> float:
+        """max |K u − P + Cᵀλ| over the free dofs (:meth:`imbalance`): the check's
+        equilibrium residual, before its scale."""
+        return float(np.abs(self.imbalance(u_free, contact_force)).max(initial=0.0))
+
+    def C_times(self, u_free: np.ndarray) -> np.ndarray:
+        """C u: how far each row's points move toward its gap (a bincount over C's entries,
+        with none of a sparse product's set-up: the check reads it on every answer)."""
+        rows, columns, values = self._entries
+        return np.bincount(rows, values * u_free[columns], minlength=self.n_contacts)
+
+    def C_transpose_times(self, contact_force: np.ndarray) -> np.ndarray:
+        """Cᵀλ: the force the contact rows put on the free dofs (as :meth:`C_times`)."""
+        rows, columns, values = self._entries
+        return np.bincount(columns, values * contact_force[rows], minlength=self.n_free)
+
+    @cached_property
+    def _entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """C's entries as (row, column, value) arrays, once per model: copies, since scipy
+        sorts a CSR matrix's indices in place when an operation needs them sorted."""
+        C = self.C
+        return (np.repeat(np.arange(C.shape[0]), np.diff(C.indptr)), C.indices.copy(),
+                np.array(C.data, dtype=float))
+
+    @cached_property
+    def free_gaps(self) -> np.ndarray:
+        """g − C K⁻¹P: the gap each row keeps with no contact force (the natural map's q)."""
+        return self.g - self.C_times(self.free_displacement)
+
+    @cached_property
+    def free_gap_size(self) -> float:
+        """‖q‖∞ of the natural map, each row scaled by :attr:`row_roots`, once per model."""
+        return float(natural_size(self.free_gaps, self.row_roots))
+
+    @cached_property
+    def row_roots(self) -> np.ndarray:
+        """1/√s̄ per row (the natural map's scaling; inf where s̄ is 0)."""
+        with np.errstate(divide="ignore"):
+            return 1.0 / np.sqrt(self.row_stiffness)
+
+    def free_part(self, u: np.ndarray) -> np.ndarray:
+        """u at the free dofs (``u[free]``, in order): a view where they are one run of
+        consecutive dofs (a chain held at one end), so that a check of 10⁶ nodes copies none."""
+        run = self._free_run
+        return u[run] if run is not None else u[self.free]
+
+    @cached_property
+    def _free_run(self) -> slice | None:
+        free = self.free
+        if free.size and int(free[-1]) - int(free[0]) + 1 == free.size:
+            return slice(int(free[0]), int(free[-1]) + 1)
+        return slice(0, 0) if not free.size else None
 
     # --- the solves
     @abstractmethod
@@ -330,6 +397,6 @@ class ContactModel(ABC):
         contact holds it there)."""
 
 
-__all__ = ["ContactModel", "ScaleTerms", "balanced_by_contact", "displacement_scale",
-           "first_step_forces", "force_scale", "natural_map", "natural_size", "natural_top",
-           "normalised_modes", "row_stiffness"]
+__all__ = ["AUGMENTED_PER_STIFFNESS", "PENALTY_PER_STIFFNESS", "ContactModel", "ScaleTerms",
+           "balanced_by_contact", "displacement_scale", "first_step_forces", "force_scale",
+           "natural_map", "natural_size", "natural_top", "normalised_modes", "row_stiffness"]
