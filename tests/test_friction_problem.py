@@ -365,8 +365,8 @@ def test_a_bed_takes_tresca_only_and_its_contacts_from_the_bounds():
 
 
 @pytest.mark.parametrize(("method", "options", "words"), [
-    ("penalty", {}, ("penalty does not take friction",)),
-    ("augmented", {}, ("augmented does not take friction",)),
+    ("penalty", {"penalty": -1.0}, ("penalty must be",)),
+    ("augmented", {"backend": "osqp"}, ("option 'backend' does not apply to augmented",)),
     ("lemke", {}, ("lemke solves the LCP of normal contact",)),
     ("pgs", {}, ("pgs solves the LCP",)),
     ("nitsche", {}, ("nitsche needs the traction",)),

@@ -14,15 +14,21 @@ method                 Tresca (``slip_bound``)                     Coulomb (``mu
                                                                    (Anitescu–Tasora, MuJoCo)
 ``"semismooth_newton"``  the exact route (as lagrange)             the active set on Coulomb's
                                                                    sets (2D only)
+``"penalty"``          the penalty-regularised law (stiff springs, the return mapping;
+                       :mod:`.penalty`), 2D; it leaves a penetration and a creep
+``"augmented"``        that law with Uzawa's update of the multipliers (the augmented
+                       Lagrangian), 2D, until they settle
 =====================  ==========================================  ===========================
 
-``penalty``, ``augmented``, ``lemke``, ``pgs`` and ``nitsche`` do not take friction: each
-refuses in one line (:data:`REFUSED`). Options, each checked here in one line: ``qp``:
+``lemke``, ``pgs`` and ``nitsche`` do not take friction: each refuses in one line
+(:data:`REFUSED`). Options, each checked here in one line: ``qp``:
 ``backend`` ("clarabel", the default; "cvxpy"; "osqp"; "qpsolvers" with ``solver``),
 ``solver`` (a qpsolvers backend, or cvxpy's solver), ``dual`` (the box QP in the forces, for
 backends that need a positive definite Hessian), ``settings`` (the backend's own);
 Coulomb's ``lagrange``, ``qp`` and ``cone``: ``max_iterations`` (default 100), ``tolerance``
-(default 1e-10: the change of the bound μλ_N, over F, that ends the fixed point).
+(default 1e-10: the change of the bound μλ_N, over F, that ends the fixed point);
+``penalty``: ``penalty`` (one ε for every row, force/length); ``augmented``: ``penalty``,
+``max_iterations`` and ``tolerance`` (of the change of the multipliers, over F).
 """
 
 from __future__ import annotations
@@ -39,17 +45,16 @@ from contactqp.friction.model import FrictionModel
 from contactqp.friction.tresca import solve_tresca
 
 BACKENDS = ("clarabel", "cvxpy", "osqp", "qpsolvers")
-TRESCA_METHODS = ("lagrange", "qp", "semismooth_newton")
-COULOMB_METHODS = ("lagrange", "qp", "cone", "relaxed", "semismooth_newton")
+TRESCA_METHODS = ("lagrange", "qp", "semismooth_newton", "penalty", "augmented")
+COULOMB_METHODS = ("lagrange", "qp", "cone", "relaxed", "semismooth_newton", "penalty",
+                   "augmented")
 OPTIONS = {"lagrange": ("max_iterations", "tolerance"),
            "qp": ("backend", "solver", "dual", "settings", "max_iterations", "tolerance"),
-           "cone": ("max_iterations", "tolerance"), "relaxed": (), "semismooth_newton": ()}
+           "cone": ("max_iterations", "tolerance"), "relaxed": (), "semismooth_newton": (),
+           "penalty": ("penalty",), "augmented": ("penalty", "max_iterations", "tolerance")}
+FIXED_POINT = ("lagrange", "qp", "cone")  # their max_iterations and tolerance: Coulomb's loop
 USE = "use lagrange (exact), qp, cone or relaxed"
 REFUSED = {
-    "penalty": "penalty does not take friction: the penalty-regularised friction law of the "
-               f"field is not implemented in contactqp; {USE}",
-    "augmented": "augmented does not take friction: the augmented Lagrangian with friction is "
-                 f"not implemented in contactqp; {USE}",
     "lemke": "lemke solves the LCP of normal contact; friction's law (a box or a disc, μλ_N "
              f"for Coulomb) is not that LCP; {USE}",
     "pgs": "pgs solves the LCP of normal contact; friction's law (a box or a disc, μλ_N for "
@@ -72,7 +77,7 @@ def checked_friction_options(law: str, method: Any, options: dict[str, Any]) -> 
     if method not in names:
         raise OptionError(f"{method} is one of Coulomb's methods and this problem has "
                           "Tresca's slip_bound, one convex problem: use lagrange or qp")
-    allowed = OPTIONS[method] if law == "coulomb" else tuple(
+    allowed = OPTIONS[method] if law == "coulomb" or method not in FIXED_POINT else tuple(
         name for name in OPTIONS[method] if name not in ("max_iterations", "tolerance"))
     unknown = sorted(set(options) - set(allowed))
     if unknown:
@@ -101,6 +106,8 @@ def _checked(key: str, value: Any) -> Any:
         return count
     if key == "tolerance":
         return positive_number("tolerance", value, "of the force scale F", OptionError)
+    if key == "penalty":
+        return positive_number("penalty", value, "force per length, e.g. N/m", OptionError)
     return value
 
 
@@ -133,6 +140,12 @@ def solve_friction(model: FrictionModel, law: str, values: np.ndarray, method: s
                    initial: np.ndarray | None = None) -> FrictionAnswer:
     """Solve one increment of a problem with friction by a method of this module's table
     (options already checked); ``initial``: forces to start the exact route from."""
+    if method in ("penalty", "augmented"):
+        from contactqp.friction.law import coulomb, tresca
+        from contactqp.friction.penalty import solve_penalised
+
+        made = tresca(model, values) if law == "tresca" else coulomb(model, values)
+        return solve_penalised(model, made, previous_u, method == "augmented", options)
     if law == "tresca":
         if method == "qp":
             name, route = qp_route(options)

@@ -21,8 +21,8 @@ from contactqp.methods.base import Solution
 from contactqp.methods.penalty import equalities, penalised_solve
 from contactqp.methods.schur import pinning as sparse_pinning
 from contactqp.model import Condensed, ContactModel, Model, wall_stiffness, without_circulation
+from contactqp.model.base import AUGMENTED_PER_STIFFNESS
 
-AUGMENTED_PER_STIFFNESS = 100.0  # default ε: this many times the stiffness the rows see
 DEFAULT_TOLERANCE = 1e-10  # stop when an update changes λ by less than this, relative
 DEFAULT_MAX_ITERATIONS = 100
 

@@ -24,10 +24,10 @@ from contactqp.methods.base import Solution
 from contactqp.methods.schur import pinning as sparse_pinning
 from contactqp.model import Condensed, ContactModel, Model, wall_stiffness
 from contactqp.model.augmented import penalised
+from contactqp.model.base import PENALTY_PER_STIFFNESS
 from contactqp.model.factor import factorise
 
 TEXTBOOK_PENALTY = 1e14  # N/m, the textbook example's ε (in SI units: penalty=1e14)
-PENALTY_PER_STIFFNESS = 1e6  # default ε: this many times the stiffness the walls see
 
 
 def default_penalty(model: Model | Condensed) -> float:
