@@ -43,6 +43,7 @@ from contactqp.scene import (
     UNIT_SYSTEMS,
     Bar,
     BarContact,
+    Bed,
     DistributedLoad,
     Load,
     Scene,
@@ -59,7 +60,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "CONTACT_KINDS", "FORMULATIONS", "GUARANTEE", "METHODS", "TOLERANCES", "UNIT_SYSTEMS", "Bar",
-    "BarContact", "Batch", "ContactqpError", "DistributedLoad", "Layout", "Load", "LoadPath",
+    "BarContact", "Batch", "Bed", "ContactqpError", "DistributedLoad", "Layout", "Load", "LoadPath",
     "Model", "OptionError", "Prepared", "Problem", "ProblemError", "ProblemResult", "QPProblem",
     "Result", "Run", "Scene", "SceneError", "SolverError", "SolverNotAvailable", "Support",
     "Tolerances", "Units", "Wall", "Walls", "__version__", "available_qp_solvers", "build_model",

@@ -248,7 +248,7 @@ def _renumbered(walls: tuple[Wall, ...] | Walls, numbers: list[np.ndarray]) -> A
 
 def convert_units(scene: Scene, units: str) -> Scene:
     """The same physical scene in another unit system (:data:`UNIT_SYSTEMS`): lengths, areas,
-    moduli, yield stresses, gaps and distributed loads converted; point loads stay in N.
+    moduli, yield stresses, gaps, distributed loads and beds' τ converted; point loads stay in N.
 
     Parameters
     ----------
@@ -286,6 +286,7 @@ def convert_units(scene: Scene, units: str) -> Scene:
                else tuple(replace(w, gap=w.gap * length) for w in scene.walls)),
         contacts=tuple(replace(c, gap=c.gap * length) for c in scene.contacts),
         distributed=tuple(replace(q, intensity=q.intensity / length) for q in scene.distributed),
+        beds=tuple(replace(b, tau=b.tau / length) for b in scene.beds),
     )
 
 

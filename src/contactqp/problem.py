@@ -387,14 +387,20 @@ def friction_fields(problem: Problem, n: int, m: int, kinds: tuple[str, ...]) ->
 
 
 def frictionless(problem: Any, what: str) -> Any:
-    """``problem`` where ``what`` can take it: anything but a Problem with friction, which
-    only :func:`contactqp.solve` and its friction methods solve and check (one line saying
-    so, never a frictionless answer in its place)."""
+    """``problem`` where ``what`` can take it: anything but a Problem with friction or a
+    scene with a frictional bed, which only :func:`contactqp.solve` and its friction methods
+    solve and check (one line saying so, never a frictionless answer in its place)."""
     if isinstance(problem, Problem) and problem.T is not None:
         raise OptionError(f"{what} takes no friction: the problem has {problem.friction} "
-                          "friction (T); solve it with contactqp.solve (methods lagrange, qp, "
-                          "cone, relaxed, semismooth_newton), whose Result checks it")
+                          f"friction (T); {FRICTION_SOLVE}")
+    if getattr(problem, "beds", ()):  # a Scene (which this layer does not import)
+        raise OptionError(f"{what} takes no friction: the scene has a frictional bed; "
+                          f"{FRICTION_SOLVE}")
     return problem
+
+
+FRICTION_SOLVE = ("solve it with contactqp.solve (methods lagrange, qp, cone, relaxed, "
+                  "semismooth_newton, penalty, augmented), whose Result checks it")
 
 
 __all__ = ["FRICTION_LAWS", "KINDS", "MAX_DOFS", "SYMMETRY_RTOL", "Problem", "friction_fields",

@@ -18,6 +18,7 @@ from contactqp.scene import (
     SECTIONS,
     Bar,
     BarContact,
+    Bed,
     DistributedLoad,
     Load,
     Scene,
@@ -28,7 +29,7 @@ from contactqp.scene import (
 )
 
 _TOP_KEYS = {"name", "units", "material", "bar", "support", "load", "wall", "walls",
-             "distributed_load", "contact", "obstacle"}
+             "distributed_load", "contact", "obstacle", "bed"}
 _WALLS_KEYS = {"nodes", "gaps", "sides", "bars"}
 _MATERIAL_KEYS = {"youngs_modulus", "yield_stress"}
 _BAR_KEYS = {"length", "lengths", "elements", "section", "areas", "area", "material"}
@@ -196,9 +197,11 @@ def scene_from_dict(data: dict, name: str = "scene") -> Scene:
         for c in _array_of_tables(data, "contact", {"bar_a", "node_a", "bar_b", "node_b", "gap"},
                                   {"bar_a", "node_a", "bar_b", "node_b", "gap"})
     )
+    beds = tuple(Bed(b["tau"], b.get("bar", 0))
+                 for b in _array_of_tables(data, "bed", {"tau", "bar"}, {"tau"}))
     scene = Scene(bars, supports, loads, walls, name=data.get("name", name),
                   units=data.get("units", "SI"),
-                  distributed=distributed, contacts=contacts)
+                  distributed=distributed, contacts=contacts, beds=beds)
     for i, o in enumerate(_array_of_tables(data, "obstacle", {"gap", "side", "bar"}, {"gap"})):
         gap = o["gap"]
         if isinstance(gap, list):
@@ -322,6 +325,8 @@ def scene_to_toml(scene: Scene) -> str:
     for c in scene.contacts:
         lines += ["", "[[contact]]", f"bar_a = {c.bar_a}", f"node_a = {c.node_a}",
                   f"bar_b = {c.bar_b}", f"node_b = {c.node_b}", f"gap = {float(c.gap)!r}"]
+    for b in scene.beds:
+        lines += ["", "[[bed]]", f"bar = {b.bar}", f"tau = {float(b.tau)!r}"]
     return "\n".join(lines) + "\n"
 
 

@@ -22,6 +22,7 @@ from contactqp.methods import Method, checked_options, hull
 from contactqp.methods.base import Solution
 from contactqp.model import Condensed, Model, condensed_model, scene_model
 from contactqp.model.chain.floating import unheld_bars
+from contactqp.model.chain.to_problem import problem_from_scene
 from contactqp.model.sparse import problem_model
 from contactqp.problem import Problem
 from contactqp.problem_files import load_problem
@@ -133,8 +134,10 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
     SolverError
         The method could not produce an answer (a singular system, a loop that does not end).
     """
-    if isinstance(scene, (str, os.PathLike)) and is_problem_path(scene):
-        scene = load_problem(scene)
+    if isinstance(scene, (str, os.PathLike)):
+        scene = as_target(scene)
+    if isinstance(scene, Scene) and scene.beds:  # friction: solved as the scene's problem
+        scene = problem_from_scene(scene)
     if isinstance(scene, Problem) and scene.T is not None:
         return solve_friction_problem(scene, method, contact, formulation, previous, options)
     if previous is not None:

@@ -186,8 +186,7 @@ def solve_qpsolvers(model: FrictionModel, law: Law, origin: np.ndarray, solver: 
             else (sp.csc_matrix(qp.P), sp.csc_matrix(qp.G)))
     problem = qpsolvers.Problem(P, qp.q, G, qp.h)
     start = time.perf_counter()
-    with silenced():
-        found = qpsolvers.solve_problem(problem, solver=solver, **options)
+    found = _qpsolvers_solve(qpsolvers, problem, solver, options)
     seconds = time.perf_counter() - start
     if not found.found or found.x is None or found.z is None:
         raise SolverError(f"{solver}: found no solution of the Tresca QP")
@@ -203,7 +202,9 @@ def _qpsolvers_dual(model: FrictionModel, law: Law, origin: np.ndarray, solver: 
 
     b = _reduced_rhs(model, origin)
     lower, upper = box(model, law)
-    keep = upper > lower  # rows whose force the law fixes at zero stay out
+    # rows whose force the law fixes at zero stay out, and rows that read no free dof
+    # (model.inert: their force is left at zero, and W would be singular with them)
+    keep = (upper > lower) & ~model.inert
     W = model.flexibility[np.ix_(keep, keep)]
     # the box as rows −λ ≤ −lower, λ ≤ upper where finite (λ_N has no upper bound, and
     # quadprog and ECOS take no infinite bound)
@@ -214,14 +215,24 @@ def _qpsolvers_dual(model: FrictionModel, law: Law, origin: np.ndarray, solver: 
     problem = (qpsolvers.Problem(W, -b[keep], G, h) if dense else
                qpsolvers.Problem(sp.csc_matrix(W), -b[keep], sp.csc_matrix(G), h))
     start = time.perf_counter()
-    with silenced():
-        found = qpsolvers.solve_problem(problem, solver=solver, **options)
+    found = _qpsolvers_solve(qpsolvers, problem, solver, options)
     seconds = time.perf_counter() - start
     if not found.found or found.x is None:
         raise SolverError(f"{solver}: found no solution of the dual Tresca QP")
     forces = np.zeros(b.size)
     forces[keep] = found.x
     return model.displacement(forces), forces, _iterations(found), "solved", seconds
+
+
+def _qpsolvers_solve(qpsolvers, problem, solver: str, options: dict):
+    """qpsolvers.solve_problem, silenced; a backend's refusal or failure (its own
+    exception) as one SolverError line."""
+    try:
+        with silenced():
+            return qpsolvers.solve_problem(problem, solver=solver, **options)
+    except (qpsolvers.ProblemError, qpsolvers.SolverError, ValueError, ArithmeticError) as error:
+        first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise SolverError(f"{solver}: {first}") from None
 
 
 def box(model: FrictionModel, law: Law) -> tuple[np.ndarray, np.ndarray]:
@@ -272,8 +283,11 @@ def solve_cvxpy(model: FrictionModel, law: Law, origin: np.ndarray, settings: di
         constraints.append(cp.SOC(t, cp.vstack(slips), axis=0))
     problem = cp.Problem(cp.Minimize(energy + law.values[J] @ t), constraints)
     start = time.perf_counter()
-    with silenced():
-        problem.solve(**settings)
+    try:
+        with silenced():
+            problem.solve(**settings)
+    except cp.error.SolverError as error:
+        raise SolverError(f"cvxpy: {str(error).splitlines()[0]}") from None
     seconds = time.perf_counter() - start
     if u.value is None:
         raise SolverError(f"cvxpy: found no solution of the Tresca problem ({problem.status})")

@@ -14,7 +14,7 @@ rigid contact would leave undetermined, is refused (contactqp.feasibility).
 
 - :mod:`~contactqp.scene.sections`: the cross-sections and the element areas they give;
 - :mod:`~contactqp.scene.parts`: the value types, Bar, Support, Load, DistributedLoad, Wall,
-  BarContact;
+  BarContact, Bed;
 - :mod:`~contactqp.scene.walls`: :class:`Walls`, many walls as arrays;
 - :mod:`~contactqp.scene.validation`: the checks of the parts together;
 - :mod:`~contactqp.scene.scene`: the Scene.
@@ -26,6 +26,7 @@ from contactqp.scene.parts import (  # noqa: F401
     WALL_SIDES,
     Bar,
     BarContact,
+    Bed,
     DistributedLoad,
     Load,
     Support,
@@ -48,7 +49,7 @@ from contactqp.scene.walls import Walls
 from contactqp.units import UNIT_SYSTEMS, Units
 
 __all__ = [
-    "AREA_RULES", "MAX_ELEMENTS", "SECTIONS", "UNIT_SYSTEMS", "WALL_SIDES", "Bar", "BarContact",
+    "AREA_RULES", "MAX_ELEMENTS", "SECTIONS", "UNIT_SYSTEMS", "WALL_SIDES", "Bar", "BarContact", "Bed",
     "Circle", "Dimension", "DistributedLoad", "HollowCircle", "Load", "Rectangle", "Scene",
     "Section", "Support", "Units", "Wall", "Walls", "section_areas",
 ]

@@ -246,6 +246,25 @@ class Support:
 
 
 @dataclass(frozen=True)
+class Bed:
+    """Bar ``bar`` lying along its whole length on a frictional bed, which resists its sliding
+    up to ``tau`` per unit length (Tresca's law: a limit that does not depend on a normal
+    force). Each node carries τ times its tributary length (half an element at each end);
+    a scene with a bed is solved with friction (docs/friction.md, "The frictional bed").
+
+    Parameters
+    ----------
+    tau : float
+        τ, the largest friction force per unit length (N/m), positive.
+    bar : int
+        The bar (default 0).
+    """
+
+    tau: float
+    bar: int = 0
+
+
+@dataclass(frozen=True)
 class Load:
     """A point load at a node of bar ``bar`` (N, positive in +x).
 

@@ -21,6 +21,7 @@ from contactqp.scene.parts import (
     MAX_ELEMENTS,
     Bar,
     BarContact,
+    Bed,
     DistributedLoad,
     Load,
     Support,
@@ -71,6 +72,9 @@ class Scene:
         The contacts between bars.
     units : str
         ``"SI"`` (m, m², N, Pa; the default) or ``"mm-N-MPa"``.
+    beds : sequence of Bed
+        Frictional beds, at most one per bar (a scene with a bed is solved with friction by
+        :func:`contactqp.solve`; it has no walls or bar contacts).
 
     Raises
     ------
@@ -87,6 +91,7 @@ class Scene:
     distributed: tuple[DistributedLoad, ...] = ()
     contacts: tuple[BarContact, ...] = ()
     units: str = "SI"
+    beds: tuple[Bed, ...] = ()
 
     def __post_init__(self) -> None:
         if isinstance(self.loads, ValuedLoads):  # a batch's scene, made again (replace)
@@ -94,7 +99,7 @@ class Scene:
         for key, kind, plural in (("bars", Bar, "bar"), ("supports", Support, "support"),
                                   ("loads", Load, "load"),
                                   ("distributed", DistributedLoad, "distributed_load"),
-                                  ("contacts", BarContact, "contact")):
+                                  ("contacts", BarContact, "contact"), ("beds", Bed, "bed")):
             object.__setattr__(self, key, _items(getattr(self, key), kind, plural))
         object.__setattr__(self, "walls", _wall_items(self.walls))
         if not self.bars:
@@ -110,6 +115,7 @@ class Scene:
         _validate_loads(self, node)
         walls = _validate_walls(self, node, held)
         _validate_contacts(self, node, held, walls)
+        _validate_beds(self)
         conflict = _conflict(self)
         if conflict:
             raise SceneError(conflict)
@@ -351,6 +357,27 @@ def _wall_items(values: Any) -> tuple[Wall, ...] | Walls:
             rows += len(value) if isinstance(value, Walls) else 1
         return Walls.of(values)
     return _items(values, Wall, "wall")
+
+
+def _validate_beds(scene: Scene) -> None:
+    """Each bed on a bar of the scene, one per bar, τ positive and finite; a bed with walls or
+    bar contacts is refused (their rows are normal rows without friction, the bed's friction
+    rows have no normal: the friction model pairs one of each per contact)."""
+    seen: set[int] = set()
+    for i, bed in enumerate(scene.beds):
+        bar = bed.bar
+        if isinstance(bar, bool) or not isinstance(bar, (int, np.integer)) or not (
+                0 <= bar < len(scene.bars)):
+            raise SceneError(f"bed[{i}].bar = {bar!r}: no such bar (the scene has "
+                             f"{len(scene.bars)})")
+        if int(bar) in seen:
+            raise SceneError(f"bed[{i}].bar = {bar}: that bar already lies on a bed")
+        seen.add(int(bar))
+        number(f"bed[{i}].tau", bed.tau, minimum=0.0, strict=True)
+    if scene.beds and scene.n_contacts:
+        raise SceneError(f"bed: a scene with a bed and {len(scene.walls)} walls, "
+                         f"{len(scene.contacts)} bar contacts: walls and bar contacts beside a "
+                         "frictional bed are not modelled; give the bed alone")
 
 
 def _items(values: Any, kind: type, name: str) -> tuple:

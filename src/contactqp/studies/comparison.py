@@ -30,8 +30,8 @@ MAX_STUDY_ELEMENTS = 1_000_000
 def study_size(scene: Scene | Problem, study: str) -> Scene | Problem:
     """``scene`` if ``study`` can hold its answers (:data:`MAX_STUDY_ELEMENTS` elements, or a
     problem's dofs), else a SceneError, before anything is solved."""
+    frictionless(scene, study)
     if isinstance(scene, Problem):
-        frictionless(scene, study)
         if scene.n > MAX_STUDY_ELEMENTS:
             raise ProblemError(f"the problem has {scene.n} dofs; {study} keeps every run's "
                                f"answer in memory and takes at most {MAX_STUDY_ELEMENTS}: "

@@ -406,6 +406,10 @@ def build_model(scene: Scene | Layout) -> Model:
     if not isinstance(scene, (Scene, Layout)):
         raise SceneError(f"scene must be a contactqp.Scene or its Layout, got {scene!r}")
     layout = scene if isinstance(scene, Layout) else layout_of(scene)
+    if layout.scene.beds:  # every chain path builds its model here: none ignores the bed
+        raise SceneError("the scene has a frictional bed: contactqp.solve takes it (with "
+                         "friction, as a problem: problem_from_scene); the chain model and "
+                         "what reads it (prepare, load_path, compare, check) do not")
     n = layout.n_nodes
     supports = np.sort(layout.support_nodes)
     free = np.delete(np.arange(n), supports)

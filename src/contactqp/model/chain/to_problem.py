@@ -19,7 +19,7 @@ def problem_from_scene(scene: Scene | Layout) -> Problem:
     lumps them), C and g (a wall's ±1, a bar contact's +1 at node a and −1 at node b: an end
     at a support touches a prescribed dof, whose support then carries the contact's force,
     as the scene's does), the supports as prescribed dofs at 0, the rows named as the scene
-    names them.
+    names them; a frictional bed as Tresca friction on its bar's nodes (:func:`bed_friction`).
 
     Parameters
     ----------
@@ -49,7 +49,30 @@ def problem_from_scene(scene: Scene | Layout) -> Problem:
     C = sp.csr_array((rows.coefficient, (rows.row, rows.node)), shape=(rows.gap.size, n))
     return Problem(K, np.asarray(layout.nodal_loads, dtype=float), C, rows.gap,
                    prescribed=np.sort(layout.support_nodes), names=row_names(scene),
-                   units=f"{scene.unit.force}, {scene.unit.length}", name=scene.name)
+                   units=f"{scene.unit.force}, {scene.unit.length}", name=scene.name,
+                   **bed_friction(layout))
 
 
-__all__ = ["problem_from_scene"]
+def bed_friction(layout: Layout) -> dict:
+    """The frictional beds of a scene as a problem's friction: one contact per node of a bar
+    on a bed (no normal row), its tangential row reading the node's displacement, its Tresca
+    slip bound τ times the node's tributary length (half of each element beside it); {} for
+    a scene without a bed."""
+    scene = layout.scene
+    if not scene.beds:
+        return {}
+    nodes, bounds = [], []
+    for bed in scene.beds:
+        lengths = scene.bars[bed.bar].lengths
+        tributary = np.zeros(lengths.size + 1)
+        tributary[:-1] += lengths / 2.0
+        tributary[1:] += lengths / 2.0
+        nodes.append(layout.node_offsets[bed.bar] + np.arange(tributary.size))
+        bounds.append(float(bed.tau) * tributary)
+    node = np.concatenate(nodes)
+    T = sp.csr_array((np.ones(node.size), (np.arange(node.size), node)),
+                     shape=(node.size, layout.n_nodes))
+    return {"T": T, "slip_bound": np.concatenate(bounds)}
+
+
+__all__ = ["bed_friction", "problem_from_scene"]
