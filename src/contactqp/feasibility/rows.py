@@ -115,6 +115,8 @@ def _certificate(C: sp.csr_array, g: np.ndarray, equality: np.ndarray) -> np.nda
     unit = sp.csr_array(sp.diags_array(1.0 / length) @ C)
     gaps = g / length
     size = float(np.abs(gaps).max())
+    if size == 0.0:  # every gap 0: u = 0 meets every row, so no certificate exists
+        return None
     y = _farkas(unit, gaps / size, equality)
     if y is None:
         return None

@@ -20,7 +20,10 @@ from contactqp.errors import ProblemError
 from contactqp.model.factor import ColumnCache, diagonal_pivots, factorise
 from contactqp.problem import Problem
 
-SINGULAR_PIVOT = 1e-10  # a pivot below this times its own diagonal entry: a mode may be free
+# a pivot below this times its own diagonal entry: a mode may be free (free_modes decides;
+# 1e-10 missed a floating bar whose stiffnesses differ 1e7-fold, pivot 2.9e-10: seed 704183
+# of tests/test_front_ends.py, where the scene and its problem then had other scales)
+SINGULAR_PIVOT = 1e-8
 NEGATIVE_PIVOT = 1e-8  # a pivot below −this times its own diagonal entry: K is indefinite
 SHIFT = 1e-10  # the shift (of each dof's own diagonal) under which free modes are sought
 FREE_MODE = 1e-13  # a mode whose forces are this much of what its entries make is free

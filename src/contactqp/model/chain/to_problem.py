@@ -19,7 +19,9 @@ def problem_from_scene(scene: Scene | Layout) -> Problem:
     lumps them), C and g (a wall's ±1, a bar contact's +1 at node a and −1 at node b: an end
     at a support touches a prescribed dof, whose support then carries the contact's force,
     as the scene's does), the supports as prescribed dofs at 0, the rows named as the scene
-    names them; a frictional bed as Tresca friction on its bar's nodes (:func:`bed_friction`).
+    names them, each node's x along its bar as the coordinates (so that the problem's size,
+    their extent, is the longest bar, as the scene's); a frictional bed as Tresca friction on
+    its bar's nodes (:func:`bed_friction`).
 
     Parameters
     ----------
@@ -50,6 +52,7 @@ def problem_from_scene(scene: Scene | Layout) -> Problem:
     return Problem(K, np.asarray(layout.nodal_loads, dtype=float), C, rows.gap,
                    prescribed=np.sort(layout.support_nodes), names=row_names(scene),
                    units=f"{scene.unit.force}, {scene.unit.length}", name=scene.name,
+                   coordinates=np.concatenate([bar.node_x for bar in scene.bars])[:, None],
                    **bed_friction(layout))
 
 
