@@ -225,3 +225,56 @@ def test_the_default_load_is_carried_by_wall_and_support():
         result = contactqp.solve(None, method, **options)
         assert result.contact_force[0] - result.reactions[0] == pytest.approx(DEFAULT_F,
                                                                                rel=1e-9)
+
+
+def test_semismooth_newton_past_the_lcps_size_takes_set_solves_without_w(monkeypatch):
+    """Past LCP_ROWS (set to 0 here) semismooth Newton with "min" on a user's model takes its
+    steps as the model's set solves, with no W: on the Hertz cylinder of contactqp.fem it
+    ends in a few steps, verified, within its bound of the exact route's answer (lagrange, a
+    different loop on the same sets), and says which route it took."""
+    pytest.importorskip("skfem")
+    import contactqp.methods.complementarity as complementarity
+    from contactqp.fem import cylinder_on_flat
+
+    problem = cylinder_on_flat(fine=0.5).problem
+    exact = contactqp.solve(problem, "lagrange")
+    monkeypatch.setattr(complementarity, "LCP_ROWS", 0)
+    found = contactqp.solve(problem, "semismooth_newton")
+    assert found.info["route"] == "set solves"
+    assert found.verified and found.status == "converged" and found.iterations <= 20
+    reach = found.force_error_bound + exact.force_error_bound
+    assert np.abs(found.contact_force - exact.contact_force).max() <= reach
+    reach = found.displacement_error_bound + exact.displacement_error_bound
+    assert np.abs(found.u - exact.u).max() <= reach
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 2**32 - 1))
+def test_semismooth_newton_by_set_solves_is_right_where_verified(seed):
+    """The set-solve route on random scenes handed over as problems (LCP_ROWS 0): where it
+    says verified, its answer is within its bound of the exact enumeration; where its sets
+    cycle (redundant rows of a chain, which the LCP route's held steps handle), it says so and
+    is not verified."""
+    import contactqp.methods.complementarity as complementarity
+
+    scene = random_scene(np.random.default_rng(seed))
+    try:
+        problem = contactqp.problem_from_scene(scene)
+        exact = reference(scene)
+    except contactqp.ContactqpError:
+        return
+    limit = complementarity.LCP_ROWS
+    complementarity.LCP_ROWS = 0
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            found = contactqp.solve(problem, "semismooth_newton")
+    except contactqp.ContactqpError:
+        return
+    finally:
+        complementarity.LCP_ROWS = limit
+    if found.status != "converged":
+        assert not found.verified or found.status == "the active set cycles"
+    if found.verified:
+        assert np.abs(found.contact_force - exact.contact_force).max(initial=0.0) <= (
+            found.force_error_bound * (1 + 1e-9) + 1e-12 * found.force_scale)

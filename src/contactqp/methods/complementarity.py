@@ -22,7 +22,9 @@ natural-map residual of that scaled problem, ‖min(z, M z + q̃)‖∞ / ‖q̃
 
 The answer is u = K⁻¹P − K⁻¹Cᵀ λ; any force carried round a loop of rows that hold a node both
 ways is taken out (:func:`contactqp.model.without_circulation`). W is dense (rows × rows) and
-K⁻¹Cᵀ free nodes × rows: up to LCP_ROWS rows (a SolverError beyond, which says so).
+K⁻¹Cᵀ free nodes × rows: up to LCP_ROWS rows (a SolverError beyond, which says so), but for
+``semismooth_newton`` with "min" on a user's (sparse) model: past that size it takes its
+Newton steps as the model's set solves, without W (:func:`_newton_on_sets`).
 """
 
 from __future__ import annotations
@@ -166,6 +168,9 @@ def solve_semismooth_newton(problem: Model | Condensed, contact: str, *, ncp: st
     if ncp != "min":
         _at_most("semismooth_newton with ncp='fischer-burmeister'", problem.n_contacts,
                  NEWTON_FB_ROWS, "each step solves a dense rows x rows Jacobian")
+    elif (contact == "inequality" and problem.layout is None and not problem.singular
+          and _past_lcp(problem)):
+        return _newton_on_sets(problem, max_iterations)
 
     def newton(M: np.ndarray, q: np.ndarray):
         z = np.zeros(q.size)
@@ -218,6 +223,40 @@ def solve_semismooth_newton(problem: Model | Condensed, contact: str, *, ncp: st
                 {"ncp": ncp})
 
     return _answer(problem, contact, "semismooth_newton", newton)
+
+
+def _past_lcp(problem: ContactModel) -> bool:
+    """Whether the LCP is past what :func:`contact_lcp` forms (W and K⁻¹Cᵀ dense)."""
+    rows = problem.n_contacts
+    return rows > LCP_ROWS or problem.n_free * rows > LCP_ENTRIES
+
+
+def _newton_on_sets(model: ContactModel, max_iterations: int) -> Solution:
+    """Semismooth Newton on min(λ, c (g − C u)) = 0 without W, for a sparse model past the
+    LCP's size: each full step is the exact answer with the step's rows held (the model's set
+    solve: one factorisation, whatever the rows), the set those rows whose λ_i exceeds
+    c_i (g − C u)_i, c_i = s̄_i (the row stiffness bound, :attr:`ContactModel.row_stiffness`;
+    any c > 0 has the same solution, and this one weighs a stiff row as a soft one). The
+    primal–dual active set of Hintermüller, Ito and Kunisch; a set that comes back stops it."""
+    c = np.where(np.asarray(model.row_stiffness) > 0.0, model.row_stiffness, 1.0)
+    u = model.free_displacement
+    lam = np.zeros(model.n_contacts)
+    seen: set[bytes] = set()
+    last = b""
+    for iteration in range(1, max_iterations + 1):
+        active = lam - c * (model.g - model.C_times(u)) > 0.0
+        key = active.tobytes()
+        if key in seen:
+            done = key == last
+            return Solution(u, lam, solver="semismooth_newton", iterations=iteration - 1,
+                            status="converged" if done else "the active set cycles",
+                            claimed_success=done, info={"ncp": "min", "route": "set solves"})
+        seen.add(key)
+        last = key
+        u, lam = model.on_set(active)
+    return Solution(u, lam, solver="semismooth_newton", iterations=max_iterations,
+                    status=f"stopped after {max_iterations} iterations", claimed_success=False,
+                    info={"ncp": "min", "route": "set solves"})
 
 
 def _held_step(M: np.ndarray, q: np.ndarray, held: np.ndarray) -> np.ndarray:
