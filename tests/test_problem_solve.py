@@ -247,15 +247,18 @@ def test_the_lcp_methods_refuse_beyond_their_stated_size():
     n = LCP_ROWS + 1  # a row on every dof: one row more than W may have
     K = sp.diags_array(np.full(n, 2.0)).tocsr()
     problem = contactqp.Problem(K, np.ones(n), sp.eye_array(n, format="csr"), np.full(n, 0.1))
-    for method in ("pgs", "semismooth_newton"):  # lemke's own limit is lower
-        with pytest.raises(SolverError, match="use lagrange") as refusal:
-            contactqp.solve(problem, method)
-        # the problem's own words: its rows and dofs, not a bar scene's nodes
-        message = str(refusal.value)
-        assert f"this problem has {n} contact rows and {n} free dofs" in message
-        assert "scene" not in message and "node" not in message
-    result = contactqp.solve(problem, "penalty")  # a wall at 0.1 holds each dof: λ = 1 − 2·0.1
-    assert result.verified and np.allclose(result.contact_force, 0.8, rtol=1e-5)
+    with pytest.raises(SolverError, match="use lagrange") as refusal:  # lemke's limit is lower
+        contactqp.solve(problem, "pgs")
+    # the problem's own words: its rows and dofs, not a bar scene's nodes
+    message = str(refusal.value)
+    assert f"this problem has {n} contact rows and {n} free dofs" in message
+    assert "scene" not in message and "node" not in message
+    # a wall at 0.1 holds each dof: λ = 1 − 2·0.1; semismooth Newton (min) past the LCP's size
+    # takes set solves, without W
+    for method in ("penalty", "semismooth_newton"):
+        result = contactqp.solve(problem, method)
+        assert result.verified and np.allclose(result.contact_force, 0.8, rtol=1e-5), method
+    assert result.info["route"] == "set solves"
 
 
 def test_the_result_reads_like_a_scene_result():
