@@ -126,3 +126,34 @@ def test_what_takes_no_friction_refuses_a_bed_in_one_line():
             call()
         assert "\n" not in str(raised.value)
     assert main(["compare", str(EXAMPLE)]) == 2
+
+
+def test_the_traction_chart_and_the_table_show_the_friction():
+    """plot_traction draws the friction force of every node at its position (the data is the
+    Result's), shades the stick zone over x ≥ x_s = 0.6 m and nothing before it; the table
+    gives the largest friction force τh = 1000 N and the nodes that stick and slip (17/24:
+    the 24 nodes before x_s slip, by the closed form)."""
+    from matplotlib.patches import Rectangle
+
+    from contactqp import plot
+
+    result = contactqp.solve(EXAMPLE)
+    x = np.linspace(0.0, L, ELEMENTS + 1)
+    ax = plot.plot_traction(result, position=x)
+    line = next(line for line in ax.get_lines() if line.get_gid() == "friction force")
+    np.testing.assert_array_equal(line.get_xdata(), x)
+    np.testing.assert_array_equal(line.get_ydata(), result.friction_force[:, 0])
+    bands = [p for p in ax.patches if p.get_gid() == "stick zone"]
+    assert len(bands) == 1
+    band = bands[0]
+    left = (band.get_x() if isinstance(band, Rectangle)
+            else float(np.min(band.get_xy()[:, 0])))
+    assert 0.575 <= left <= 0.6 <= 0.6 + 1e-12 and x[24] == pytest.approx(0.6)
+    text = contactqp.table([contactqp.Run(label="lagrange", contact="inequality",
+                                          result=result)])
+    row = next(line for line in text.splitlines() if line.startswith("lagrange"))
+    assert "1000 (" in row and " 17/24 " in row
+    with pytest.raises(contactqp.OptionError, match="one value per contact"):
+        plot.plot_traction(result, position=x[:-1])
+    with pytest.raises(contactqp.OptionError, match="with friction"):
+        plot.plot_traction(contactqp.solve())

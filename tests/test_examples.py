@@ -55,6 +55,9 @@ CHECKS = {
     "batches": lambda v: (v["batch"].contact_force[:, 0], np.maximum(
         v["loads"] * default_compliance(2) - DEFAULT_GAP, 0.0) / default_compliance(4)),
     "load_path": lambda v: (v["kink"], DEFAULT_GAP / (DEFAULT_F * default_compliance(2))),
+    # the bed's closed form at the nodes, u = −τ(x_s − x)²/(2EA), written out here
+    "frictional_bed": lambda v: (v["result"].u, -v["TAU"] * np.clip(
+        v["F"] / v["TAU"] - v["x"], 0.0, None) ** 2 / (2.0 * v["E"] * v["A"])),
     # the Hertz numbers are checked in tests/test_fem.py; here: another method, same forces
     "hertz_cylinder": lambda v: (v["result"].contact_force, contactqp.solve(
         v["model"].problem, "semismooth_newton").contact_force),

@@ -82,7 +82,8 @@ def table(runs: list[Run]) -> str:
     units, then its notes.
 
     Columns: the contact force (the one contact's, or the largest and (k/n) how many of the n
-    contacts carry force: more than the check's 1e-5·F); its error against the exact reference
+    contacts carry force: more than the check's 1e-5·F); with friction, the friction force
+    (as the contact force) and how many contacts stick and slip; its error against the exact reference
     (the largest on any node, N; where the runs carry one, :attr:`Run.exact_error`); the
     largest penetration; the largest residual of the check; verified (``(pulls)``: a wall or a
     bar contact pulls); the time of the whole solve; the row's note. Each note (a failed
@@ -105,6 +106,8 @@ def table(runs: list[Run]) -> str:
     exact = any(run.exact_force is not None for run in runs)
     marks, texts = _numbered(runs)
     header = [("method", ""), ("contact", ""), ("contact force", _bracket(force_unit))]
+    friction = any(run.result is not None and run.result.friction is not None for run in runs)
+    header += [("friction force", _bracket(force_unit)), ("stick/slip", "")] if friction else []
     header += [("error", _bracket(force_unit))] if exact else []
     header += [("penetration", _bracket(length_unit)), ("residual", ""), ("verified", ""),
                ("time", "(ms)"), ("note", "")]
@@ -117,17 +120,30 @@ def table(runs: list[Run]) -> str:
         else:
             error = run.exact_error
             cells += [formatting.forces_summary(r.contact_force, scale)]
+            cells += _friction_cells(r, scale) if friction else []
             cells += [("-" if error is None else formatting.number(error, ".1e"))] if exact else []
             cells += [formatting.number(r.penetration.max(), ".3g") if r.penetration.size else "-",
                       formatting.number(_largest_residual(r), ".1e"), _verdict(run),
                       f"{1e3 * r.time:.2f}", mark]
         rows.append(cells)
-    lines = formatting.text_table(header, rows).splitlines()
+    table_lines = formatting.text_table(header, rows).splitlines()  # never wrapped: a row
+    lines = []  # broken across lines reads as two rows (the friction columns pass 100)
     if any(run.result is not None and not run.result.physical for run in runs):
         lines.append(PULLS_KEY)
     lines += [f"[{k}] {text}" for k, text in enumerate(texts, 1)]
     lines += [f"note: {line}" for line in _scene_notes(runs)]
-    return formatting.wrap("\n".join(lines))
+    return "\n".join([*table_lines, *formatting.wrap("\n".join(lines)).splitlines()])
+
+
+def _friction_cells(result: Result, scale: float) -> list[str]:
+    """The friction columns: the largest friction force (and how many contacts carry one, as
+    the contact force's column counts them), and how many contacts stick and slip."""
+    if result.friction is None:
+        return ["-", "-"]
+    sizes = np.linalg.norm(np.asarray(result.friction_force, dtype=float), axis=1)
+    state = np.asarray(result.state)
+    return [formatting.forces_summary(sizes, scale),
+            f"{int(np.sum(state == 'stick'))}/{int(np.sum(state == 'slip'))}"]
 
 
 def _scene_notes(runs: list[Run]) -> list[str]:

@@ -13,6 +13,7 @@ from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
 
+from contactqp.errors import OptionError
 from contactqp.plot.common import (
     CONTACT,
     LOAD,
@@ -143,7 +144,13 @@ def plot_bar(result: Result, ax: Axes | None = None, magnification: float | None
     of node_a drawn at bar b's height); every displacement and gap magnified by
     ``magnification`` (default :func:`bar_magnification`, a 1-2-5 number). Bars whose
     extents overlap are drawn on separate rows. The deformed rows give each contact force
-    that is not zero; the title says whether the answer was verified."""
+    that is not zero; the title says whether the answer was verified. An OptionError for a
+    Result that has no scene (a problem's; a scene on a frictional bed is solved as one:
+    :func:`~contactqp.plot.plot_traction` draws it)."""
+    if getattr(result, "scene", None) is None:
+        raise OptionError("plot_bar draws a bar scene's Result; this one is a problem's (a "
+                          "scene on a frictional bed is solved as its problem: use "
+                          "plot_traction)")
     ax = _axes(ax, (9, 3.2 + 0.9 * _rows(result)))
     sketch = _Sketch(result, bar_magnification(result) if magnification is None
                      else float(magnification))
