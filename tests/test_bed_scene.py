@@ -157,3 +157,6 @@ def test_the_traction_chart_and_the_table_show_the_friction():
         plot.plot_traction(result, position=x[:-1])
     with pytest.raises(contactqp.OptionError, match="with friction"):
         plot.plot_traction(contactqp.solve())
+    with pytest.raises(contactqp.OptionError, match="use plot_traction") as raised:
+        plot.plot_bar(result)  # a problem's Result: no bars to draw
+    assert "\n" not in str(raised.value)
