@@ -51,8 +51,8 @@ def check_model(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, contac
     """Check an answer (free-dof displacements, one force per row) against a model (module
     docstring); ``contact="equality"`` holds every row on its gap. ``chain``: the chain's
     own certificate, a function giving its (force, displacement) bounds. ``natural``: work out
-    the natural-map residual (a batch reads it case by case). ``imbalance``: max |K u − P +
-    Cᵀλ| where the caller has it (the model's :meth:`largest_imbalance` otherwise)."""
+    the natural-map residual (a batch reads it case by case). ``imbalance``:
+    ‖K u − P + Cᵀλ‖∞ where the caller has it (else the model's :meth:`largest_imbalance`)."""
     equality = model.equality | (contact == "equality")
     u_free = np.asarray(u_free, dtype=float).reshape(-1)
     lam = np.asarray(lam, dtype=float).reshape(-1)

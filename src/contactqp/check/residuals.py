@@ -99,7 +99,7 @@ def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality
               imbalance: float | None = None) -> tuple[dict[str, float | None], np.ndarray]:
     """(the residuals of the module docstring but force and displacement, the penetration)
     of an answer (free-dof displacements, one force per row); ``equality`` per row.
-    ``imbalance``: max |K u − P + Cᵀλ| where the caller has worked it out (a chain, from the
+    ``imbalance``: ‖K u − P + Cᵀλ‖∞ where the caller has worked it out (a chain, from the
     element forces it has)."""
     F = model.force_scale
     pen = model.C_times(u_free) - model.g

@@ -12,9 +12,9 @@ with the answer's contact forces λ (one per row, positive when the row pushes: 
 - its algebra: ``n_free``, ``n_contacts``, ``K`` (sparse, free x free), ``P``, ``C`` (CSR),
   ``g``, ``equality`` (per row), ``row_names``, ``floating`` (modes K leaves free); the
   products the check reads on every answer, each a model may work out its own fast way:
-  ``C_times`` (C u), ``C_transpose_times`` (Cᵀλ), ``largest_imbalance`` (max |K u − P +
-  Cᵀλ|: a chain in blocks from its band or its element forces), ``free_part`` (u at the free
-  dofs, a view where they are one run);
+  ``C_times`` (C u), ``C_transpose_times`` (Cᵀλ), ``largest_imbalance`` (‖K u − P + Cᵀλ‖∞:
+  a chain in blocks from its band or its element forces), ``free_part`` (u at the free dofs,
+  a view where they are one run);
 - its solves: ``solve_K`` (K⁻¹), ``free_displacement`` (K⁻¹P), ``set_solve`` (the exact
   answer with a set of rows held on their gaps, and its corrections);
 - what it is in the user's words: ``full_displacements`` (every dof), ``reactions`` (the
@@ -261,7 +261,7 @@ class ContactModel(ABC):
         return out
 
     def largest_imbalance(self, u_free: np.ndarray, contact_force: np.ndarray) -> float:
-        """max |K u − P + Cᵀλ| over the free dofs (:meth:`imbalance`): the check's
+        """‖K u − P + Cᵀλ‖∞ over the free dofs (:meth:`imbalance`): the check's
         equilibrium residual, before its scale."""
         return float(np.abs(self.imbalance(u_free, contact_force)).max(initial=0.0))
 

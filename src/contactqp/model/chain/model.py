@@ -221,7 +221,7 @@ class Model(ContactModel):
 
     def largest_imbalance(self, u_free: np.ndarray, contact_force: np.ndarray,
                           links: np.ndarray | None = None) -> float:
-        """max |K u − P + Cᵀλ| over the free nodes (:meth:`imbalance`). ``links``: the
+        """‖K u − P + Cᵀλ‖∞ over the free nodes (:meth:`imbalance`). ``links``: the
         element forces on the links between nodes (:func:`link_forces`), where the caller has
         them: then (K u)_j = N_(j−1) − N_j, one subtraction. Worked out in blocks of
         IMBALANCE_BLOCK nodes: no array of n, whose first touch costs its page faults (an
