@@ -246,9 +246,14 @@ def family(row: dict[str, Any]) -> str:
     return f"qp {backend}" if backend in ("cvxpy", "qpsolvers") else "qp, direct"
 
 
-def chart(cases: list[dict[str, Any]], rows: list[dict[str, Any]], path: Path) -> None:
+def chart(cases: list[dict[str, Any]], rows: list[dict[str, Any]], path: Path,
+          families: dict[str, str] = FAMILIES, family: Callable[[dict], str] = family,
+          title: str = "2D cases (scikit-fem): every method and QP solver, time against force "
+                       "error", reference: str = "Lagrange") -> None:
     """Time / floor against force error / F, one panel per case (two columns; the legend in
-    a spare panel); filled: verified, hollow: flagged; each point named."""
+    a spare panel); filled: verified, hollow: flagged; each point named. ``families``: a
+    colour per family of runs, ``family`` a row's; ``reference``: what the error is against
+    (benchmarks/friction_group.py draws its runs with its own)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -257,16 +262,16 @@ def chart(cases: list[dict[str, Any]], rows: list[dict[str, Any]], path: Path) -
     lines = -(-(len(cases) + 1) // 2)  # the cases and the legend, two to a line
     figure = Figure(figsize=(11.0, 4.6 * lines), layout="constrained")
     axes = list(figure.subplots(lines, 2, squeeze=False).flat)
-    named = [panel(ax, case, [r for r in rows if r["case"] == case["case"]])
+    named = [panel(ax, case, [r for r in rows if r["case"] == case["case"]],
+                   lambda r: families[family(r)], reference)
              for ax, case in zip(axes, cases)]
     spare = axes[len(cases)]
     spare.axis("off")
-    spare.legend(handles=legend_handles(), loc="center", fontsize=9, frameon=False)
+    spare.legend(handles=legend_handles(families), loc="center", fontsize=9, frameon=False)
     for ax in axes[len(cases) + 1:]:
         ax.set_visible(False)
-    figure.suptitle("2D cases (scikit-fem): every method and QP solver, time against force "
-                    f"error (error 0 drawn at {ERROR_FLOOR:.0e}, no answer at {NO_ANSWER:g})",
-                    fontsize=10)
+    figure.suptitle(f"{title} (error 0 drawn at {ERROR_FLOOR:.0e}, no answer at "
+                    f"{NO_ANSWER:g})", fontsize=10)
     figure.draw_without_rendering()  # the layout set, and then frozen: names placed in it
     figure.set_layout_engine("none")
     for ax, points in zip(axes, named):
@@ -277,14 +282,14 @@ def chart(cases: list[dict[str, Any]], rows: list[dict[str, Any]], path: Path) -
 NO_ANSWER = 10.0  # where a run with no finite answer is drawn (force error / F)
 
 
-def panel(ax: Any, case: dict[str, Any], rows: list[dict[str, Any]]
-          ) -> list[tuple[float, float, str]]:
+def panel(ax: Any, case: dict[str, Any], rows: list[dict[str, Any]],
+          colour_of: Callable[[dict], str], reference: str) -> list[tuple[float, float, str]]:
     """One case's runs: a point per run that has a time; the points, to be named."""
     points = []
     for r in rows:
         if "seconds" not in r:
             continue
-        colour = FAMILIES[family(r)]
+        colour = colour_of(r)
         x = min(max(r["force_error"], ERROR_FLOOR), NO_ANSWER)
         ax.scatter(x, r["ratio"], s=34, marker="o" if r["outcome"] in ("verified", "flagged")
                    else "X", facecolors=colour if r["verified"] else "none", edgecolors=colour,
@@ -294,18 +299,18 @@ def panel(ax: Any, case: dict[str, Any], rows: list[dict[str, Any]]
            ylim=(0.7, 1.6 * max([p[1] for p in points], default=10.0)))
     ax.axvline(WRONG, color="k", ls="--", lw=0.8)
     ax.axhline(1.0, color="k", ls=":", lw=0.8)
-    ax.set(xlabel="largest contact-force error / F (against Lagrange)",
+    ax.set(xlabel=f"largest contact-force error / F (against {reference})",
            ylabel="time end to end / the floor",
            title=f"{case['case']}: {case['dofs']:,} dofs, {case['rows']} rows (floor "
-                 f"{case['floor_seconds'] * 1e3:.0f} ms)")
+                 f"{case['floor_seconds'] * 1e3:.3g} ms)")
     return points
 
 
-def legend_handles() -> list[Any]:
+def legend_handles(families: dict[str, str]) -> list[Any]:
     from matplotlib.lines import Line2D
 
     handles = [Line2D([], [], color=c, marker="o", ls="", label=name)
-               for name, c in FAMILIES.items()]
+               for name, c in families.items()]
     return handles + [
         Line2D([], [], color="k", marker="o", ls="", label="verified"),
         Line2D([], [], color="k", marker="o", ls="", markerfacecolor="none",

@@ -2,7 +2,7 @@
 the same run (one banded factor-and-solve of K) and, where it has one, an exact reference.
 
     python benchmarks/run.py [--cases matrix,taper,walls,contacts,overhead,loop,speed,lcp,
-                              guarantee,fem]
+                              guarantee,fem,friction]
                              [--quick] [--out DIR] [--scenes N] [--seed S]
     python benchmarks/run.py --check DIR       # is a matrix output folder complete? (CI)
 
@@ -27,6 +27,10 @@ the same run (one banded factor-and-solve of K) and, where it has one, an exact 
                exact reference (benchmarks/guarantee.py)
     fem        the 2D cases (scikit-fem: the Hertz cylinder at two meshes, the block on a wavy
                foundation) by every method and QP solver, timed and judged (benchmarks/fem2d.py)
+    friction   the friction cases (the frictional bed in 2D and 3D, Cattaneo–Mindlin under
+               Tresca and Coulomb, three one-node Coulomb cases) by every method and QP solver
+               that takes friction, timed and judged against exact answers; the refusals with
+               their reasons (benchmarks/friction_group.py)
 
 Case builders and timing: benchmarks/cases.py. Outputs go to DIR (default benchmarks/out),
 one subfolder per group.
@@ -40,6 +44,7 @@ from pathlib import Path
 
 import contacts
 import fem2d
+import friction_group
 import groups
 import guarantee
 import lcp
@@ -48,7 +53,7 @@ import matrix
 import speed
 
 CASES = ("matrix", "taper", "walls", "contacts", "overhead", "loop", "speed", "lcp", "guarantee",
-         "fem")
+         "fem", "friction")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -87,6 +92,8 @@ def main(argv: list[str] | None = None) -> int:
             speed.main(args.quick, out / "speed")
         elif name == "fem":
             fem2d.main(args.quick, out / "fem")
+        elif name == "friction":
+            friction_group.main(args.quick, out / "friction")
         elif name == "lcp":
             lcp.main(args.quick, out / "lcp")
         elif name == "guarantee":

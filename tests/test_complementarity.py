@@ -233,8 +233,8 @@ def test_semismooth_newton_past_the_lcps_size_takes_set_solves_without_w(monkeyp
     ends in a few steps, verified, within its bound of the exact route's answer (lagrange, a
     different loop on the same sets), and says which route it took."""
     pytest.importorskip("skfem")
-    import contactqp.methods.complementarity as complementarity
     from contactqp.fem import cylinder_on_flat
+    from contactqp.methods import complementarity
 
     problem = cylinder_on_flat(fine=0.5).problem
     exact = contactqp.solve(problem, "lagrange")
@@ -255,7 +255,7 @@ def test_semismooth_newton_by_set_solves_is_right_where_verified(seed):
     says verified, its answer is within its bound of the exact enumeration; where its sets
     cycle (redundant rows of a chain, which the LCP route's held steps handle), it says so and
     is not verified."""
-    import contactqp.methods.complementarity as complementarity
+    from contactqp.methods import complementarity
 
     scene = random_scene(np.random.default_rng(seed))
     try:

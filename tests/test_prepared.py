@@ -74,7 +74,9 @@ def test_the_prepared_path_gives_the_fresh_result_bit_for_bit_on_random_scenes(m
                 == (fresh.verified, fresh.force_error_bound, fresh.displacement_error_bound)
 
 
-SCENE_FILES = [pytest.param(path, id=path.stem) for path in EXAMPLES]
+# a scene on a frictional bed is refused by prepare (tests/test_bed_scene.py)
+SCENE_FILES = [pytest.param(path, id=path.stem) for path in EXAMPLES
+               if "[[bed]]" not in path.read_text(encoding="utf-8")]
 
 
 @pytest.mark.parametrize(("method", "options"), RUNS, ids=RUN_IDS)
