@@ -37,7 +37,7 @@ from contactqp.friction.answer import FrictionAnswer, force_scale, make_answer
 from contactqp.friction.law import COULOMB, Law
 from contactqp.friction.model import FrictionModel
 from contactqp.friction.reduced import join, split
-from contactqp.model.base import AUGMENTED_PER_STIFFNESS, PENALTY_PER_STIFFNESS
+from contactqp.model.base import AUGMENTED_PER_STIFFNESS, PENALTY_PER_STIFFNESS, row_stiffness
 
 MAX_STATES = 100  # state updates per solve before the loop is stopped ("not settled")
 MAX_ITERATIONS = 100  # the augmented Lagrangian's updates of λ̄ (default)
@@ -97,11 +97,8 @@ def _penalties(model: FrictionModel, penalty, augmented: bool) -> np.ndarray:
     """ε per row of G = [C; T]: the option's one value, or the default per row stiffness."""
     if penalty is not None:
         return np.full(model.rows.shape[0], float(penalty))
-    G, K = model.rows, model.K
-    squared = np.asarray(G.multiply(G).sum(axis=1)).ravel()
-    energy = np.asarray((G @ K).multiply(G).sum(axis=1)).ravel()
-    with np.errstate(divide="ignore", invalid="ignore"):
-        stiffness = np.where(squared > 0.0, energy / squared**2, 0.0)
+    stiffness = row_stiffness(model.K, model.rows)  # NaN on a row that reads no free dof
+    stiffness = np.where(np.isfinite(stiffness), stiffness, 0.0)
     return (AUGMENTED_PER_STIFFNESS if augmented else PENALTY_PER_STIFFNESS) * stiffness
 
 

@@ -36,7 +36,6 @@ from contactqp.model import (
     element_forces,
     largest,
     link_forces,
-    penetration,
     scene_model,
 )
 from contactqp.scene import Scene
@@ -99,18 +98,6 @@ def sized(model: Model | Scene, u: Any, contact_force: Any, reactions: Any
     reactions = np.asarray(reactions, dtype=float).reshape(-1)
     _shape("reactions", reactions, len(layout.scene.supports))
     return model, u, lam, reactions
-
-
-def free_gaps(model: Model) -> np.ndarray:
-    """q = g − C K⁻¹P: the gap of every row with no contact force (m)."""
-    return -penetration(model.layout, model.free_displacement_of_nodes)
-
-
-def row_compliance_roots(layout: Layout) -> np.ndarray:
-    """√ of the compliance each row sees with the supports held
-    (:attr:`contactqp.model.Layout.row_compliance`; a bar contact's two ends in series); NaN
-    where a row sees no stiffness or an infinite one (it is left out of :func:`natural_map`)."""
-    return layout.row_compliance_roots  # made once per layout topology
 
 
 def _shape(name: str, values: np.ndarray, size: int) -> None:

@@ -207,18 +207,6 @@ class Model(ContactModel):
         """Whether a bar has no support (K singular: contact alone holds it)."""
         return bool(self.floating)
 
-    def imbalance(self, u_free: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
-        """K u − P + Cᵀλ over the free nodes, from K's band (no sparse product)."""
-        band = self.band
-        out = band[0] * u_free
-        if u_free.size > 1:
-            out[:-1] += band[1, :-1] * u_free[1:]
-            out[1:] += band[1, :-1] * u_free[:-1]
-        out -= self.P
-        if self.C.nnz:
-            out += self.C_transpose_times(contact_force)
-        return out
-
     def largest_imbalance(self, u_free: np.ndarray, contact_force: np.ndarray,
                           links: np.ndarray | None = None) -> float:
         """‖K u − P + Cᵀλ‖∞ over the free nodes (:meth:`imbalance`). ``links``: the
