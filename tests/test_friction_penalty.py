@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 import contactqp
@@ -109,14 +109,50 @@ def test_frictional_bed_by_the_augmented_lagrangian_is_the_closed_form(force):
         assert error <= found.displacement_error_bound
 
 
+NODE_3D = {"C": [[0.0, 0.0, -1.0]], "g": [0.0], "T": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]}
+
+
+@pytest.mark.parametrize("law", [{"slip_bound": 1.5}, {"mu": 0.3}])
+def test_3d_node_slips_along_its_pull_by_the_closed_form(law):
+    """One node (u_x, u_y, u_z), K = 2 I, on the flat u_z ≥ 0, pressed by 5 and pulled in the
+    plane by (3, 4) (|f_t| = 5): it slips along (3, 4)/5 with the friction force b at the bound
+    (b = s = 1.5, or μ·5 = 1.5), u_t = (5 − b)/2 · (3, 4)/5, λ_N = 5 (by hand: K u_t = f_t − b t̂).
+    The augmented Lagrangian reaches it to round-off; the penalty ε leaves its penetration
+    λ_N/ε exactly (the z row decouples: (2 + ε) u_z = −5)."""
+    problem = contactqp.Problem(2.0 * np.eye(3), [3.0, 4.0, -5.0], **NODE_3D, **law)
+    along = np.array([0.6, 0.8])
+    augmented = contactqp.solve(problem, "augmented")
+    assert augmented.verified and augmented.status == "converged", augmented.message
+    # the augmented Lagrangian stops when λ changes by 1e-10 of F: u within that over ε
+    np.testing.assert_allclose(augmented.u, [*(1.75 * along), 0.0], atol=1e-10)
+    np.testing.assert_allclose(augmented.friction_force, [1.5 * along], rtol=1e-10)
+    np.testing.assert_allclose(augmented.contact_force, [5.0], rtol=1e-10)
+    assert list(augmented.state) == ["slip"]
+    eps = 1e3
+    penalty = contactqp.solve(problem, "penalty", penalty=eps)
+    assert penalty.u[2] == pytest.approx(-5.0 / (2.0 + eps), rel=1e-12)
+    lam_N = 5.0 * eps / (2.0 + eps)
+    b = 1.5 if "slip_bound" in law else 0.3 * lam_N
+    np.testing.assert_allclose(penalty.u[:2], (5.0 - b) / 2.0 * along, rtol=1e-12)
+    np.testing.assert_allclose(penalty.friction_force, [b * along], rtol=1e-12)
+
+
+def test_3d_node_sticks_and_the_penalty_creeps_by_its_force_over_epsilon():
+    """Tresca s = 6 > |f_t| = 5: the node sticks, u = 0, λ_T = (3, 4), λ_N = 5 exactly; the
+    penalty lets it creep by f/(2 + ε) in each direction (all three rows stiff springs)."""
+    problem = contactqp.Problem(2.0 * np.eye(3), [3.0, 4.0, -5.0], **NODE_3D, slip_bound=6.0)
+    eps = 1e4
+    penalty = contactqp.solve(problem, "penalty", penalty=eps)
+    np.testing.assert_allclose(penalty.u, np.array([3.0, 4.0, -5.0]) / (2.0 + eps), rtol=1e-12)
+    assert list(penalty.state) == ["stick"]
+    augmented = contactqp.solve(problem, "augmented", penalty=eps)
+    assert augmented.verified
+    np.testing.assert_allclose(augmented.u, 0.0, atol=1e-12)
+    np.testing.assert_allclose(augmented.friction_force, [[3.0, 4.0]], rtol=1e-10)
+
+
 def test_penalty_friction_refusals_are_one_line():
-    """3D (two tangential rows per contact) and a bad penalty are refused in one line each."""
-    three_d = contactqp.Problem(np.eye(3), [1.0, 1.0, -1.0], C=[[0.0, 0.0, -1.0]], g=[0.0],
-                                T=[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], slip_bound=0.5)
-    for method in ("penalty", "augmented"):
-        with pytest.raises(contactqp.OptionError, match="2D only") as error:
-            contactqp.solve(three_d, method)
-        assert "\n" not in str(error.value)
+    """A bad penalty and an option the method does not take are refused in one line each."""
     for bad in (-1.0, 0.0, float("nan"), "stiff"):
         with pytest.raises(contactqp.OptionError, match="penalty") as error:
             contactqp.solve(one_node(slip_bound=1.0), "penalty", penalty=bad)
@@ -127,18 +163,24 @@ def test_penalty_friction_refusals_are_one_line():
 
 @settings(max_examples=30, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.sampled_from(["tresca", "coulomb"]))
-def test_random_2d_problems_verified_answers_are_within_their_bounds(seed, law):
-    """Random 2D problems (nodes on a flat, SPD K coupling them): every verified penalty or
-    augmented answer lies within its stated bounds of the exact route's (another method: the
-    active set on the multipliers); the augmented Lagrangian converges. Coulomb with μ ≤ 0.4,
+@example(19, "tresca")  # 3D: a full Newton step swung a slip's direction for ever (now halved)
+@example(31, "tresca")
+def test_random_problems_verified_answers_are_within_their_bounds(seed, law):
+    """Random problems, 2D or 3D by the seed's parity (nodes on a flat, SPD K coupling
+    them): every verified penalty or augmented answer lies within its stated bounds of the
+    exact route's (another method: the active set on the multipliers); the augmented
+    Lagrangian converges. Coulomb with μ ≤ 0.4,
     where the answer is unique on these problems (the exact route's verdict says so)."""
     rng = np.random.default_rng(seed)
+    d = 1 + seed % 2  # tangential rows per contact
     nodes = int(rng.integers(2, 7))
-    n, m = 2 * nodes, int(rng.integers(1, nodes + 1))
+    n, m = (d + 1) * nodes, int(rng.integers(1, nodes + 1))
     A = rng.standard_normal((n, n))
-    C, T = np.zeros((m, n)), np.zeros((m, n))
+    C, T = np.zeros((m, n)), np.zeros((d * m, n))
     for i, j in enumerate(rng.choice(nodes, m, replace=False)):
-        C[i, 2 * j + 1], T[i, 2 * j] = -1.0, 1.0
+        C[i, (d + 1) * j + d] = -1.0
+        for k in range(d):
+            T[d * i + k, (d + 1) * j + k] = 1.0
     bound = ({"slip_bound": rng.uniform(0.0, 2.0, m)} if law == "tresca"
              else {"mu": rng.uniform(0.0, 0.4, m)})
     problem = contactqp.Problem(A @ A.T + n * np.eye(n), 3.0 * rng.standard_normal(n), C=C,

@@ -15,9 +15,9 @@ method                 Tresca (``slip_bound``)                     Coulomb (``mu
 ``"semismooth_newton"``  the exact route (as lagrange)             the active set on Coulomb's
                                                                    sets (2D only)
 ``"penalty"``          the penalty-regularised law (stiff springs, the return mapping;
-                       :mod:`.penalty`), 2D; it leaves a penetration and a creep
+                       :mod:`.penalty`), 2D and 3D; it leaves a penetration and a creep
 ``"augmented"``        that law with Uzawa's update of the multipliers (the augmented
-                       Lagrangian), 2D, until they settle
+                       Lagrangian), 2D and 3D, until they settle
 =====================  ==========================================  ===========================
 
 ``lemke``, ``pgs`` and ``nitsche`` do not take friction: each refuses in one line

@@ -36,6 +36,7 @@ MAX_SETS = 100  # the active set's changes before it gives up
 # bed: 81 steps for 160 nodes); past this many steps from zero it restarts from the dual
 # solved by an interior point method, after which it needs a few
 QUICK_SETS = 25
+NIL_SLIP = 1e-12  # a 3D slip this small against its bound (as a force) has no direction
 SINGULAR = 1e-14  # a reciprocal condition number below this: the set's equations are singular
 
 
@@ -126,27 +127,35 @@ def equations(model: FrictionModel, law: Law, sets: Sets, forces: np.ndarray,
             residual[flat], jacobian[flat] = reads[flat], -W[flat]
         else:
             _slip_equations(law, sets, contacts, own, lam_T, w_T, bound, W, residual,
-                            jacobian)
+                            jacobian, model.tangential_stiffness)
     return residual, jacobian
 
 
 def _slip_equations(law: Law, sets: Sets, contacts: np.ndarray, own: np.ndarray,
                     lam_T: np.ndarray, w_T: np.ndarray, bound: np.ndarray, W: np.ndarray,
-                    residual: np.ndarray, jacobian: np.ndarray) -> None:
+                    residual: np.ndarray, jacobian: np.ndarray,
+                    stiffness: np.ndarray) -> None:
     """λ_T − s ŵ = 0 on slipping contacts (in 2D ŵ is the set's sign; in 3D the slip's own
-    direction, whose derivative is (I − ŵŵᵀ)/‖w‖ dw/dλ, dw/dλ = −W)."""
+    direction, whose derivative is (I − ŵŵᵀ)/‖w‖ dw/dλ, dw/dλ = −W). A 3D contact whose slip
+    is nil (k‖w‖ within NIL_SLIP of its bound: a set corrected from sticking starts there)
+    takes the set's direction, the active-set rule's trial ‖λ_T + k w_T‖, held fixed for
+    that step: the slip's own direction is round-off there."""
     index = np.flatnonzero(contacts)
     s = bound[index]
     d = own.shape[1]
     if d == 1:
         direction = sets.direction[index]
+        moving = np.zeros(index.size, bool)
     else:
         length = np.linalg.norm(w_T[index], axis=1)
-        direction = w_T[index] / np.where(length > 0.0, length, 1.0)[:, None]
+        moving = length * stiffness[index] > NIL_SLIP * s
+        direction = np.where(moving[:, None],
+                             w_T[index] / np.where(moving, length, 1.0)[:, None],
+                             sets.direction[index])
     residual[own] = lam_T[index] - s[:, None] * direction
     for local, rows in enumerate(own):
         jacobian[rows, rows] = 1.0
-        if d > 1 and length[local] > 0.0:
+        if moving[local]:
             hat = direction[local]
             projector = (np.eye(d) - np.outer(hat, hat)) / length[local]
             jacobian[rows] += s[local] * projector @ W[rows]
