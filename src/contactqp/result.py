@@ -377,8 +377,8 @@ def checked(model: ContactModel, solution: Solution, contact: str,
     model, u, lam, reactions = sized(model, u, lam, reactions)
     u_free = model.free_part(u)
     found = check_model(model, u_free, lam, contact, tolerances, natural=natural,
-                        chain=lambda: chain_bounds(model, u, lam, reactions, contact,
-                                                   tolerances, forces, links),
+                        chain=lambda pen: chain_bounds(model, u, lam, reactions, contact,
+                                                       tolerances, forces, links, pen),
                         imbalance=model.largest_imbalance(u_free, lam, links))
     pen = penetration(layout, u) if found.penetration is None else found.penetration
     return Checked(u, lam, forces, reactions, pen, found)

@@ -42,7 +42,7 @@ from contactqp.model.sparse import as_sparse_model
 from contactqp.problem import frictionless
 from contactqp.scene import Scene
 
-ChainBounds = Callable[[], tuple[float, float]]
+ChainBounds = Callable[[np.ndarray], tuple[float, float]]
 
 
 def check_model(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, contact: str,
@@ -50,7 +50,8 @@ def check_model(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, contac
                 natural: bool = True, imbalance: float | None = None) -> Check:
     """Check an answer (free-dof displacements, one force per row) against a model (module
     docstring); ``contact="equality"`` holds every row on its gap. ``chain``: the chain's
-    own certificate, a function giving its (force, displacement) bounds. ``natural``: work out
+    own certificate, a function of the penetration C u − g (read here first) giving its
+    (force, displacement) bounds. ``natural``: work out
     the natural-map residual (a batch reads it case by case). ``imbalance``:
     ‖K u − P + Cᵀλ‖∞ where the caller has it (else the model's :meth:`largest_imbalance`)."""
     equality = model.equality | (contact == "equality")
@@ -66,7 +67,7 @@ def check_model(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, contac
     force = displacement = np.inf
     why = ""
     if chain is not None:
-        force, displacement = chain()
+        force, displacement = chain(pen)
         within = (force <= tolerances.force * model.force_scale
                   and displacement <= tolerances.displacement * model.displacement_scale)
         if within or not passing:  # the general certificate cannot change this verdict
@@ -127,7 +128,8 @@ def check(model: Any, u: Any, contact_force: Any, reactions: Any = None,
             return not_finite(model, model.equality | (contact == "equality"), lam)
         found = check_model(
             model, model.free_part(u), lam, contact, tolerances,
-            chain=lambda: chain_bounds(model, u, lam, reactions, contact, tolerances))
+            chain=lambda pen: chain_bounds(model, u, lam, reactions, contact, tolerances,
+                                           penetration=pen))
         return found
     model = as_sparse_model(frictionless(model, "contactqp.check"))
     u = _sized("u", u, model.problem.n)

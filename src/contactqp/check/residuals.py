@@ -100,47 +100,53 @@ def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality
     """(the residuals of the module docstring but force and displacement, the penetration)
     of an answer (free-dof displacements, one force per row); ``equality`` per row.
     ``imbalance``: ‖K u − P + Cᵀλ‖∞ where the caller has worked it out (a chain, from the
-    element forces it has)."""
+    element forces it has).
+
+    Each row's force residuals are read first with the bound s̄ ≥ s (no solve); only where
+    one of them passes SIGNIFICANT of F (or is not a number) are they read again with the
+    row's own s (:meth:`~contactqp.model.base.ContactModel.seen_stiffness`)."""
     F = model.force_scale
-    pen = model.C_times(u_free) - model.g
+    pen = model.C_times(u_free)
+    pen -= model.g
+    bound = model.row_stiffness
     pushing = np.maximum(lam, 0.0)
     if equality.any():
         unilateral = ~equality
-        past = np.where(equality, np.abs(pen), np.maximum(pen, 0.0))
-        standing = np.where(unilateral, np.maximum(-pen, 0.0), 0.0)
-        pulling = -lam[unilateral]
-    else:  # every row unilateral (a scene's, most problems'): no masks, fewer passes
-        past, standing, pulling = np.maximum(pen, 0.0), np.maximum(-pen, 0.0), -lam
-    s = _stiffness(model, past, standing, pushing, F)
-    passed = np.multiply(past, s, out=past)
-    both = np.minimum(pushing, np.multiply(standing, s, out=standing), out=pushing)
+        passed = np.where(equality, np.abs(pen), np.maximum(pen, 0.0))
+        both = np.where(unilateral, np.maximum(-pen, 0.0), 0.0)
+        pulling = float((-lam[unilateral]).max(initial=0.0))
+    else:  # every row unilateral (a scene's, most problems'): no masks, fewer arrays
+        passed = np.maximum(pen, 0.0)
+        both = np.negative(pen)
+        np.maximum(both, 0.0, out=both)
+        pulling = max(0.0, -float(lam.min(initial=0.0)))
+    passed *= bound  # p⁺·s̄
+    both *= bound  # (−p)⁺·s̄, then min(λ⁺, (−p)⁺·s̄)
+    np.minimum(pushing, both, out=both)
+    top_passed = np.maximum.reduce(passed, initial=0.0)  # NaN where a row's is
+    top_both = np.maximum.reduce(both, initial=0.0)
+    if not (top_passed <= SIGNIFICANT * F and top_both <= SIGNIFICANT * F):
+        rows = np.flatnonzero(~(np.maximum(passed, both) <= SIGNIFICANT * F))
+        s = model.seen_stiffness(rows)
+        p = pen[rows]
+        past = np.where(equality[rows], np.abs(p), np.maximum(p, 0.0))
+        standing = np.where(equality[rows], 0.0, np.maximum(-p, 0.0))
+        passed[rows] = past * s
+        both[rows] = np.minimum(pushing[rows], standing * s)
+        top_passed = np.fmax.reduce(passed, initial=0.0)  # 0·∞ counts 0
+        top_both = np.fmax.reduce(both, initial=0.0)
     found: dict[str, float | None] = {
         "equilibrium": (model.largest_imbalance(u_free, lam) if imbalance is None
                         else imbalance) / F,
-        "feasibility": float(np.fmax.reduce(passed, initial=0.0)) / F,  # 0·∞ counts 0
-        "complementarity": float(np.fmax.reduce(both, initial=0.0)) / F,  # 0 on equalities
-        "sign": float(pulling.max(initial=0.0)) / F}
+        "feasibility": float(top_passed) / F,
+        "complementarity": float(top_both) / F,  # 0 on equalities
+        "sign": pulling / F}
     if equality.all():
         found["complementarity"] = found["sign"] = None
     return found, pen
 
 
 SIGNIFICANT = 1e-9  # of F: a row whose residual s̄ puts below this needs no solve for its s
-
-
-def _stiffness(model: ContactModel, past: np.ndarray, standing: np.ndarray,
-               pushing: np.ndarray, F: float) -> np.ndarray:
-    """Per row, the stiffness it sees, 1/W_ii (:meth:`~contactqp.model.base.ContactModel.
-    seen_stiffness`), where the residuals read it above SIGNIFICANT of F with the bound s̄
-    (which is never smaller); s̄ elsewhere, where it makes no residual that counts."""
-    bound = model.row_stiffness
-    reach = np.maximum(past * bound, np.minimum(pushing, standing * bound))
-    rows = np.flatnonzero(~(reach <= SIGNIFICANT * F))  # NaN rows too: the solve says what
-    if not rows.size:
-        return bound
-    s = np.array(bound, dtype=float)
-    s[rows] = model.seen_stiffness(rows)
-    return s
 
 
 def natural_residual(model: ContactModel, lam: np.ndarray, pen: np.ndarray,

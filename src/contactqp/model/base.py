@@ -134,7 +134,7 @@ def row_stiffness(K: sp.sparray, C: sp.csr_array) -> np.ndarray:
     return s
 
 
-def first_step_forces(p: np.ndarray, s: np.ndarray, C: sp.csr_array,
+def first_step_forces(p: np.ndarray, s: np.ndarray, transpose_times: Any,
                       solve_K: Any) -> np.ndarray:
     """λ₀ = μ S p, μ = pᵀSp / (Sp)ᵀW(Sp), W = C K⁻¹ Cᵀ (one solve): the forces of one
     steepest-descent step, weighted by the rows' stiffness, towards closing the penetrations
@@ -142,7 +142,7 @@ def first_step_forces(p: np.ndarray, s: np.ndarray, C: sp.csr_array,
     weighted = np.where(p > 0.0, s * p, 0.0)
     if not np.any(weighted):
         return np.zeros(p.size)
-    push = C.T @ weighted
+    push = transpose_times(weighted)  # Cᵀ(S p)
     flex = float(push @ solve_K(push))
     if not flex > 0.0:
         return np.zeros(p.size)
@@ -269,6 +269,10 @@ class ContactModel(ABC):
         """C u: how far each row's points move toward its gap (a bincount over C's entries,
         with none of a sparse product's set-up: the check reads it on every answer)."""
         rows, columns, values = self._entries
+        if self._one_entry_per_row:  # each row reads one dof (walls, a flat): no sum
+            moved = u_free[columns]
+            moved *= values
+            return moved
         return np.bincount(rows, values * u_free[columns], minlength=self.n_contacts)
 
     def C_transpose_times(self, contact_force: np.ndarray) -> np.ndarray:
@@ -283,6 +287,11 @@ class ContactModel(ABC):
         C = self.C
         return (np.repeat(np.arange(C.shape[0]), np.diff(C.indptr)), C.indices.copy(),
                 np.array(C.data, dtype=float))
+
+    @cached_property
+    def _one_entry_per_row(self) -> bool:
+        """Whether C has exactly one entry in each row, in row order."""
+        return bool(np.array_equal(self.C.indptr, np.arange(self.C.shape[0] + 1)))
 
     @cached_property
     def free_gaps(self) -> np.ndarray:

@@ -158,6 +158,11 @@ class SparseModel(ContactModel):
         model = SparseModel(problem, self.free, self.K, P, self.C, g, self.factor, self.floating,
                             self.cache)
         loads_held(model)
+        # what K and C alone decide, where this model has worked it out already; never P or g
+        for name in ("row_stiffness", "row_roots", "_entries", "_one_entry_per_row",
+                     "_free_run"):
+            if name in self.__dict__:
+                model.__dict__[name] = self.__dict__[name]
         return model
 
     # --- the protocol (contactqp.model.base)
@@ -282,7 +287,8 @@ class SparseModel(ContactModel):
         size = np.abs(C).max(axis=1).toarray().reshape(-1) if C.shape[0] else np.zeros(0)
         pen = C @ u0_free - self.g
         passed = np.where(self.equality, np.abs(pen), np.maximum(pen, 0.0))
-        contact = first_step_forces(passed, self.row_stiffness, C, self.pseudo_solve)
+        contact = first_step_forces(passed, self.row_stiffness, self.C_transpose_times,
+                                    self.pseudo_solve)
         coordinates = problem.coordinates
         extent = (float(np.max(np.ptp(coordinates, axis=0), initial=0.0))
                   if coordinates is not None and coordinates.size else 0.0)

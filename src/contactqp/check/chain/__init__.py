@@ -64,11 +64,13 @@ def external_forces(layout: Layout, contact_force: np.ndarray,
 
 def chain_bounds(model: Model, u: np.ndarray, lam: np.ndarray, reactions: np.ndarray,
                  contact: str, tolerances: Tolerances, element_force: np.ndarray | None = None,
-                 link_force: np.ndarray | None = None) -> tuple[float, float]:
+                 link_force: np.ndarray | None = None, penetration: np.ndarray | None = None
+                 ) -> tuple[float, float]:
     """The chain's own (force, displacement) bounds of an answer (module docstring): u every
     node's displacement, one force per row, every support's reaction, all finite and of the
     model's sizes (:func:`sized`). ``element_force`` and ``link_force``: the element forces,
-    and the same on the links between nodes (0 between bars), when the caller has them."""
+    and the same on the links between nodes (0 between bars), and ``penetration`` C u − g per
+    row, when the caller has them."""
     layout = model.layout
     F, U = model.force_scale, model.displacement_scale
     forces = element_forces(layout, u) if element_force is None else element_force
@@ -79,7 +81,8 @@ def chain_bounds(model: Model, u: np.ndarray, lam: np.ndarray, reactions: np.nda
     r_max, links_size = section_residual_and_size(
         links, nodes, external, outside.levels if outside.steps is None else None)
     bounds = error_bounds(layout, u, lam, links, nodes, external, r_max, contact, F, U,
-                          tolerances.complementarity, outside, largest(u), links_size)
+                          tolerances.complementarity, outside, largest(u), links_size,
+                          penetration)
     return bounds.force_error_bound, bounds.displacement_error_bound
 
 

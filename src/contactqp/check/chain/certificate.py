@@ -32,20 +32,20 @@ ROUND_OFF = 4.0 * np.finfo(float).eps  # a few units in the last place of what i
 
 @dataclass(frozen=True)
 class Bounds:
-    residuals: dict[str, float | None]
     force_error_bound: float
     displacement_error_bound: float
-    penetration: np.ndarray  # C u − g per row (m), as the residuals read it
 
 
 def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarray,
                  nodes: np.ndarray, external: np.ndarray, r_max: float, contact: str,
                  F: float, U: float, hold: float, outside: Running,
-                 u_size: float | None = None, links_size: float | None = None) -> Bounds:
-    """The residuals and the error bounds of an answer (module docstring); a contact whose
-    force passes ``hold`` × F counts as pushing when the held nodes are chosen. ``outside``:
-    the running sum of ``external`` over the nodes; ``u_size`` ‖u‖∞ and ``links_size``
-    ‖links‖∞, when the caller has them.
+                 u_size: float | None = None, links_size: float | None = None,
+                 pen: np.ndarray | None = None) -> Bounds:
+    """The error bounds of an answer (module docstring; its residuals are the check's, read
+    once for every model, :mod:`contactqp.check.residuals`); a contact whose force passes
+    ``hold`` × F counts as pushing when the held nodes are chosen. ``outside``: the running
+    sum of ``external`` over the nodes; ``u_size`` ‖u‖∞, ``links_size`` ‖links‖∞ and ``pen``
+    C u − g per row, when the caller has them (read, not written).
 
     The answer is exact for a nearby scene: the rows that push are held at where the answer
     puts them (their gaps moved by δ = |penetration|), the other rows' forces and every
@@ -55,7 +55,7 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     changes the forces at itself and its held neighbours (:func:`gap_moves`)."""
     rows, row_nodes, _, _ = layout.rows
     entry = layout.by_entry  # x[entry] is x[rows]
-    pen = penetration(layout, u)
+    pen = penetration(layout, u) if pen is None else pen
     equality = contact == "equality"
     pushing, chosen = _pushing(layout, lam, pen, hold * F, equality)
     if chosen is not None and np.array_equal(chosen[0], pushing):
@@ -142,20 +142,7 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
         displacement_bound += _release(layout, held, pushing, lam, force_bound)
     if unpinned_bar(layout, pushing) is not None:  # the answer leaves a bar free to move
         displacement_bound = np.inf
-    past = np.abs(pen) if equality else np.maximum(pen, 0.0)
-    feasibility = largest(np.multiply(past, s, out=past)) / F
-    del past
-    residuals: dict[str, float | None] = {"equilibrium": r_max / F, "feasibility": feasibility}
-    if equality:
-        residuals.update(complementarity=None, sign=None)
-    else:  # min(λ⁺, gap⁺·s), in gap⁺'s own array
-        natural = np.minimum(np.maximum(lam, 0.0), np.multiply(standing, s, out=standing),
-                             out=standing)
-        residuals["complementarity"] = max(largest(natural), pair) / F
-        residuals["sign"] = largest_pull(lam) / F
-    residuals["force"] = force_bound / F
-    residuals["displacement"] = displacement_bound / U
-    return Bounds(residuals, force_bound, displacement_bound, pen)
+    return Bounds(force_bound, displacement_bound)
 
 
 def _pushing(layout: Layout, lam: np.ndarray, pen: np.ndarray, hold: float,
@@ -205,12 +192,6 @@ def _release(layout: Layout, held: np.ndarray, pushing: np.ndarray, lam: np.ndar
     stiffness = row_stiffness(layout, still, sure)[unsure]
     with np.errstate(divide="ignore"):
         return float(np.max(force_bound / stiffness))
-
-
-def largest_pull(lam: np.ndarray) -> float:
-    """How hard the hardest-pulling contact pulls (N; 0 when none pulls): max(−λ, 0), without
-    an array of −λ."""
-    return max(0.0, -float(np.min(lam, initial=0.0)))
 
 
 def unpinned_bar(layout: Layout, pushing: np.ndarray) -> int | None:

@@ -207,8 +207,11 @@ def _seen_stiffness_few(layout: Layout, held: np.ndarray, nodes: np.ndarray) -> 
 def largest(values: np.ndarray) -> float:
     """∞-norm (0 for no values; inf when any value is NaN or infinite)."""
     values = np.asarray(values, dtype=float)
-    if values.size == 0:
-        return 0.0
+    if values.size <= TINY:  # a few numbers: Python's max is quicker than numpy's set-up
+        numbers = values.ravel().tolist()
+        if not all(map(math.isfinite, numbers)):
+            return math.inf
+        return float(max(map(abs, numbers), default=0.0))
     if values.size <= SMALL:  # one |x| and one reduction, without numpy's Python layers
         top = float(np.maximum.reduce(np.abs(values), axis=None))
     else:  # two reductions and no array of |x| over a long chain
@@ -217,6 +220,7 @@ def largest(values: np.ndarray) -> float:
     return top if math.isfinite(top) else math.inf
 
 
+TINY = 16  # arrays up to this size are read as Python floats
 SMALL = 1024  # arrays up to this size are cheaper to copy than to reduce twice
 
 

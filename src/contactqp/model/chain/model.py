@@ -72,7 +72,7 @@ class Model(ContactModel):
         # what K and the supports decide, worked out here once for every model made from this
         # one (a prepared scene's solves), and K itself if made; never P or g
         kept = ["floating", "determinate", "stiffest", "K", "row_stiffness", "row_roots",
-                "_entries", "_contact_columns"]
+                "_entries", "_one_entry_per_row", "_contact_columns", "_free_run"]
         if self.determinate is not None:
             kept.append("compliance_to_support")
         for name in kept:
@@ -345,10 +345,14 @@ class Model(ContactModel):
     def scale_terms(self) -> ScaleTerms:
         """The scales' terms (:mod:`contactqp.model.base`), by statics on the chain."""
         layout = self.layout
-        u0_free = self.pseudo_solve(balanced_by_contact(self.P, self._free_modes, self.C))
-        u0 = self.full_displacements(u0_free)
+        if self.floating:
+            u0 = self.full_displacements(
+                self.pseudo_solve(balanced_by_contact(self.P, self._free_modes, self.C)))
+        else:  # K⁻¹P, which the methods read too: solved once per model
+            u0 = self.free_displacement_of_nodes
         passed = np.maximum(penetration(layout, u0), 0.0)  # rows of ±1: a length as it is
-        contact = first_step_forces(passed, self.row_stiffness, self.C, self.pseudo_solve)
+        contact = first_step_forces(passed, self.row_stiffness, self.C_transpose_times,
+                                    self.pseudo_solve)
         unbalanced = (np.abs(np.bincount(self._floating_groups, self.P)[: len(self.floating)])
                       if self.floating else np.zeros(0))
         reactions = self.reactions_of(u0, np.zeros(self.n_contacts))
