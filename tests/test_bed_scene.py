@@ -115,11 +115,11 @@ def test_bad_beds_are_refused_in_one_line(bed, extra, words):
 
 
 def test_what_takes_no_friction_refuses_a_bed_in_one_line():
-    """Every entry point but solve refuses the bed (never a frictionless answer in its
-    place); the CLI's compare too."""
+    """Every entry point but solve and load_path (tests/test_friction_path.py) refuses the
+    bed (never a frictionless answer in its place); the CLI's compare too."""
     scene = bed_scene(0.5 * TAU * L)
     for call in (lambda: contactqp.compare(scene), lambda: contactqp.prepare(scene),
-                 lambda: contactqp.load_path(scene), lambda: contactqp.penalty_sweep(scene),
+                 lambda: contactqp.penalty_sweep(scene),
                  lambda: contactqp.first_contact_factor(scene),
                  lambda: contactqp.check(scene, np.zeros(ELEMENTS + 1), [])):
         with pytest.raises(contactqp.ContactqpError, match="frictional bed") as raised:

@@ -527,12 +527,11 @@ def test_no_random_tresca_answer_is_verified_past_its_bound(seed):
 
 @pytest.mark.parametrize("call", [
     lambda p: contactqp.prepare(p, "lagrange"),
-    lambda p: contactqp.load_path(p, steps=3),
     lambda p: contactqp.first_contact_factor(p),
     lambda p: contactqp.compare(p),
     lambda p: contactqp.penalty_sweep(p),
     lambda p: contactqp.check(p, np.zeros(p.n), np.zeros(p.m)),
-], ids=["prepare", "load_path", "first_contact_factor", "compare", "penalty_sweep", "check"])
+], ids=["prepare", "first_contact_factor", "compare", "penalty_sweep", "check"])
 def test_what_cannot_take_friction_refuses_it_rather_than_drop_it(call):
     """The studies, prepare and the frictionless check would solve or judge the problem as if
     it had no friction: each refuses in one line instead."""

@@ -223,11 +223,15 @@ def command_curve(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(path.to_dict(), indent=2))
         return OK
-    kink = first_contact_factor(scene)
+    # with friction no closed form says where the first contact closes (Tresca's friction
+    # acts on an open contact too): the curve alone
+    friction = getattr(scene, "T", None) is not None or bool(getattr(scene, "beds", ()))
+    kink = None if friction else first_contact_factor(scene)
     length = scene.unit_names[1]
     print(f"load path, {scene.name or 'problem'}: displacement of {path.where}"
-          f"{f' ({length})' if length else ''} against the load factor; first contact closes "
-          f"at t = {kink:.6g} (closed form)")
+          f"{f' ({length})' if length else ''} against the load factor"
+          + ("; with friction, each step an increment from the last" if friction else
+             f"; first contact closes at t = {kink:.6g} (closed form)"))
     names = list(path.methods)
     print(f"{'t':>7}  " + "  ".join(f"{n:>14}" for n in names))
     for i, t in enumerate(path.load_factor):

@@ -26,12 +26,13 @@ from contactqp._validate import whole_number
 from contactqp.errors import ContactqpError, OptionError
 from contactqp.many.prepared import prepare
 from contactqp.model import Model, scene_model, wall_stiffness
+from contactqp.model.chain.to_problem import problem_from_scene
 from contactqp.model.sparse import problem_model
 from contactqp.problem import Problem, frictionless
 from contactqp.progress import Progress, as_progress
 from contactqp.result import Result, plain
 from contactqp.scene import MAX_ELEMENTS, Scene
-from contactqp.solve import as_target
+from contactqp.solve import as_target, solve
 
 # name -> (method, contact, options): unilateral contact, the textbook equality (which pulls
 # before the wall is reached), the penalty, the augmented Lagrangian and a cvxpy QP; and
@@ -42,6 +43,14 @@ CURVE_METHODS: dict[str, tuple[str, str, dict[str, Any]]] = {
     "penalty": ("penalty", "inequality", {}),
     "augmented": ("augmented", "inequality", {}),
     "qp": ("qp", "inequality", {"backend": "cvxpy"}),
+}
+# with friction (a problem with T, or a scene with a frictional bed): the methods that take it,
+# each step an increment from the last (contactqp.friction.methods)
+FRICTION_CURVE_METHODS: dict[str, tuple[str, str, dict[str, Any]]] = {
+    "lagrange": ("lagrange", "inequality", {}),
+    "penalty": ("penalty", "inequality", {}),
+    "augmented": ("augmented", "inequality", {}),
+    "qp": ("qp", "inequality", {}),
 }
 DEFAULT_STEPS = 21
 # 1001 steps of the default scene took 28 s (every curve method, a shared 2-core machine) and
@@ -73,7 +82,7 @@ def curve_methods(scene: Scene | Model | Any) -> dict[str, tuple[str, str, dict[
 class MethodPath:
     """One method's curve: per step the load point's displacement (m), one contact force (N)
     and one penetration (m) per contact row, and whether the step's Result was verified and
-    physical (no wall pulls)."""
+    physical (no wall pulls); with friction also the friction forces (steps x contacts x d)."""
 
     load_point_displacement: np.ndarray
     contact_force: np.ndarray  # steps x contact rows
@@ -81,6 +90,7 @@ class MethodPath:
     verified: np.ndarray
     physical: np.ndarray
     results: tuple[Result, ...]
+    friction_force: np.ndarray | None = None  # steps x contacts x d, with friction
 
 
 @dataclass(frozen=True)
@@ -125,7 +135,9 @@ class LoadPath:
                                "contact_force": plain(p.contact_force),
                                "penetration": plain(p.penetration),
                                "verified": p.verified.tolist(),
-                               "physical": p.physical.tolist()}
+                               "physical": p.physical.tolist(),
+                               **({} if p.friction_force is None
+                                  else {"friction_force": plain(p.friction_force)})}
                         for name, p in self.methods.items()},
             "failed": dict(self.failed),
         }
@@ -200,7 +212,10 @@ def load_path(scene: Scene | Problem | None = None, steps: int = DEFAULT_STEPS,
     scene : Scene, Problem, a path of either, or None
         The scene (None: the default scene), or a problem: its loads f and prescribed values
         are stepped together, and the curve follows the dof with the largest load (where
-        nothing loads it, its first prescribed dof).
+        nothing loads it, its first prescribed dof). With friction (a problem with T, or a
+        scene with a frictional bed, stepped as its problem) each step is an increment from
+        the state the step before reached (``previous``: the slip is measured from there), by
+        :data:`FRICTION_CURVE_METHODS` by default, and each curve has its friction forces.
     steps : int
         The number of load factors, 0 and 1 included (default 21).
     methods : dict, optional
@@ -223,13 +238,19 @@ def load_path(scene: Scene | Problem | None = None, steps: int = DEFAULT_STEPS,
     SceneError
         A scene whose loads leave a bar held by contact alone unheld.
     """
-    scene = frictionless(as_target(scene), "load_path")
+    scene = as_target(scene)
+    if isinstance(scene, Scene) and scene.beds:  # friction: stepped as the scene's problem
+        scene = problem_from_scene(scene)
     factors = _factors(steps, scene)
     report = as_progress(progress, "load path")
-    model = scene_model(scene) if isinstance(scene, Scene) else problem_model(scene)
-    if model.singular:  # with no load nothing fixes where such a body is: start one step in
-        factors = np.linspace(0.0, 1.0, factors.size + 1)[1:]
-    methods = curve_methods(model) if methods is None else methods
+    friction = isinstance(scene, Problem) and scene.T is not None
+    if friction:
+        methods = FRICTION_CURVE_METHODS if methods is None else methods
+    else:
+        model = scene_model(scene) if isinstance(scene, Scene) else problem_model(scene)
+        if model.singular:  # with no load nothing fixes where such a body is: start a step in
+            factors = np.linspace(0.0, 1.0, factors.size + 1)[1:]
+        methods = curve_methods(model) if methods is None else methods
     node = model.layout.load_point() if isinstance(scene, Scene) else _load_dof(scene)
     paths, failed = {}, {}
     total = factors.size * len(methods)
@@ -240,13 +261,36 @@ def load_path(scene: Scene | Problem | None = None, steps: int = DEFAULT_STEPS,
             report(done + solved, total)
 
         try:
-            paths[name] = _method_path(scene, factors, node, method, contact, options,
-                                       None if report is None else step)
+            stepped = _friction_path if friction else _method_path
+            paths[name] = stepped(scene, factors, node, method, contact, options,
+                                  None if report is None else step)
         except ContactqpError as error:
             failed[name] = str(error)
             if report is not None:
                 report(done + factors.size, total)
     return LoadPath(scene, factors, node, paths, failed)
+
+
+def _friction_path(problem: Problem, factors: np.ndarray, node: int, method: str,
+                   contact: str, options: dict[str, Any], progress: Progress | None
+                   ) -> MethodPath:
+    """One method's curve on a problem with friction: its loads and prescribed values scaled
+    together, each step an increment from the state the step before reached
+    (:func:`contactqp.solve` with ``previous``; the slip of a step is measured from there)."""
+    results: list[Result] = []
+    previous = None
+    for k, t in enumerate(factors):
+        step = problem.with_values(f=t * problem.f, prescribed_values=t * problem.prescribed_values)
+        previous = solve(step, method, contact, previous=previous, **options)
+        results.append(previous)
+        if progress is not None:
+            progress(k + 1, factors.size)
+    return MethodPath(np.array([r.u[node] for r in results]),
+                      np.array([r.contact_force for r in results]),
+                      np.array([r.penetration for r in results]),
+                      np.array([r.verified for r in results]),
+                      np.array([r.physical for r in results]), tuple(results),
+                      np.array([r.friction_force for r in results]))
 
 
 def _load_dof(problem: Problem) -> int:
@@ -282,6 +326,7 @@ def _method_path(scene: Scene | Problem, factors: np.ndarray, node: int, method:
 __all__ = [
     "CURVE_METHODS",
     "DEFAULT_STEPS",
+    "FRICTION_CURVE_METHODS",
     "MAX_STEPS",
     "LoadPath",
     "MethodPath",
