@@ -285,12 +285,17 @@ def _friction_path(problem: Problem, factors: np.ndarray, node: int, method: str
         results.append(previous)
         if progress is not None:
             progress(k + 1, factors.size)
+    return _curve(results, node, friction=True)
+
+
+def _curve(results: list[Result], node: int, friction: bool = False) -> MethodPath:
+    """A method's curve from its steps' Results (``friction``: with their friction forces)."""
     return MethodPath(np.array([r.u[node] for r in results]),
                       np.array([r.contact_force for r in results]),
                       np.array([r.penetration for r in results]),
                       np.array([r.verified for r in results]),
                       np.array([r.physical for r in results]), tuple(results),
-                      np.array([r.friction_force for r in results]))
+                      np.array([r.friction_force for r in results]) if friction else None)
 
 
 def _load_dof(problem: Problem) -> int:
@@ -313,11 +318,7 @@ def _method_path(scene: Scene | Problem, factors: np.ndarray, node: int, method:
             results.append(prepared.solve_scene(step))
             if progress is not None:
                 progress(k + 1, factors.size)
-        return MethodPath(np.array([r.u[node] for r in results]),
-                          np.array([r.contact_force for r in results]),
-                          np.array([r.penetration for r in results]),
-                          np.array([r.verified for r in results]),
-                          np.array([r.physical for r in results]), tuple(results))
+        return _curve(results, node)
     batch = prepared.solve_many(loads=np.outer(factors, prepared.scene_loads), progress=progress)
     return MethodPath(batch.u[:, node], batch.contact_force, batch.penetration, batch.verified,
                       batch.physical, tuple(batch[step] for step in range(factors.size)))

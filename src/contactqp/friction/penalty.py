@@ -113,22 +113,30 @@ def _penalties(model: FrictionModel, penalty, augmented: bool) -> np.ndarray:
 def _law_forces(model: FrictionModel, law: Law, eps: np.ndarray, lam_bar: np.ndarray,
                 reads: np.ndarray) -> tuple[np.ndarray, tuple]:
     """(λ by the regularised law at ``reads`` = G u − h, the states: closed, stick, sign)."""
-    mN = model.normal_rows
-    eps_N, eps_T = split(model, eps)
-    bar_N, bar_T = split(model, lam_bar)
-    read_N, slip = split(model, reads)
-    if mN:
-        trial_N = bar_N + eps_N * read_N
-        closed = trial_N > 0.0
-        lam_N = np.where(closed, trial_N, 0.0)
-    else:
-        closed, lam_N = np.ones(model.contacts, dtype=bool), None
+    _, eps_T = split(model, eps)
+    _, bar_T = split(model, lam_bar)
+    _, slip = split(model, reads)
+    closed, lam_N = _normal_law(model, eps, lam_bar, reads)
     bound = law.bound(lam_N)
     trial_T = bar_T[:, 0] + eps_T[:, 0] * slip[:, 0]
     stick = np.abs(trial_T) <= bound
     sign = np.sign(trial_T)
     lam_T = np.where(stick, trial_T, bound * sign)
     return join(lam_N, lam_T[:, None]), (closed, stick, sign)
+
+
+def _normal_law(model: FrictionModel, eps: np.ndarray, lam_bar: np.ndarray,
+                reads: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """(closed, λ_N): λ_N = ⟨λ̄_N + ε_N (C u − g)⟩₊ per contact; all closed and None with no
+    normal rows."""
+    if not model.normal_rows:
+        return np.ones(model.contacts, dtype=bool), None
+    eps_N, _ = split(model, eps)
+    bar_N, _ = split(model, lam_bar)
+    read_N, _ = split(model, reads)
+    trial_N = bar_N + eps_N * read_N
+    closed = trial_N > 0.0
+    return closed, np.where(closed, trial_N, 0.0)
 
 
 def _settle(model: FrictionModel, law: Law, eps: np.ndarray, lam_bar: np.ndarray,
@@ -257,15 +265,10 @@ def _law_3d(model: FrictionModel, law: Law, eps: np.ndarray, lam_bar: np.ndarray
     K + Gᵀ M G, the states as bytes) in 3D (module docstring)."""
     m, d, mN = model.contacts, model.d, model.normal_rows
     eps_N, eps_T = split(model, eps)
-    bar_N, bar_T = split(model, lam_bar)
-    read_N, slip = split(model, reads)
-    if mN:
-        trial_N = bar_N + eps_N * read_N
-        closed = trial_N > 0.0
-        lam_N = np.where(closed, trial_N, 0.0)
-        normal = [sp.diags_array(np.where(closed, eps_N, 0.0))]
-    else:
-        closed, lam_N, normal = np.ones(m, dtype=bool), None, []
+    _, bar_T = split(model, lam_bar)
+    _, slip = split(model, reads)
+    closed, lam_N = _normal_law(model, eps, lam_bar, reads)
+    normal = [sp.diags_array(np.where(closed, eps_N, 0.0))] if mN else []
     bound = law.bound(lam_N)
     trial = bar_T + eps_T * slip
     size = np.linalg.norm(trial, axis=1)
