@@ -49,6 +49,8 @@ X free, u₀ = K⁺(P − Cᵀμ), the loads with what they put on X taken up by
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from functools import cached_property
@@ -96,6 +98,13 @@ def displacement_scale(terms: ScaleTerms) -> Any:
     are more than the round-off of u₀, ROUND_OFF_LENGTH of the largest force term over the
     softest stiffness (a floating body's balanced loads leave u₀ = 1e-38 m on one front end,
     0 on the other). Terms may be arrays (one entry per case of a batch): U is then one."""
+    if _plain(terms):  # one case: the same rule in Python floats, without numpy's set-up
+        force = max(terms.loads, terms.reactions, terms.contact, terms.unbalanced)
+        noise = ROUND_OFF_LENGTH * force / terms.softest if terms.softest > 0.0 else 0.0
+        scale = max(terms.free, terms.passed)
+        fallback = (terms.widest if terms.widest > 0.0 else
+                    terms.size if terms.size > 0.0 else 1.0)
+        return float(scale if scale > noise else fallback)
     force = np.maximum.reduce([terms.loads, terms.reactions, terms.contact, terms.unbalanced])
     with np.errstate(divide="ignore", invalid="ignore"):
         noise = np.where(np.greater(terms.softest, 0.0),
@@ -108,9 +117,19 @@ def displacement_scale(terms: ScaleTerms) -> Any:
 
 def force_scale(terms: ScaleTerms, U: Any) -> Any:
     """F by its rule (module docstring); terms and U may be arrays, as for U."""
+    if _plain(terms) and isinstance(U, float):
+        scale = max(terms.loads, terms.reactions, terms.contact, terms.unbalanced)
+        return float(scale if scale > 0.0 else terms.softest * U if terms.softest > 0.0
+                     else 1.0)
     scale = np.maximum.reduce([terms.loads, terms.reactions, terms.contact, terms.unbalanced])
     fallback = np.where(np.greater(terms.softest, 0.0), np.multiply(terms.softest, U), 1.0)
     return _scalar(np.where(scale > 0.0, scale, fallback))
+
+
+def _plain(terms: ScaleTerms) -> bool:
+    """Whether every term is one number, none of them NaN (the batch's are arrays)."""
+    values = dataclasses.astuple(terms)
+    return all(isinstance(v, float) for v in values) and not any(map(math.isnan, values))
 
 
 def _scalar(value: np.ndarray) -> Any:
