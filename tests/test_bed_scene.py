@@ -62,6 +62,10 @@ def test_the_bar_on_its_bed_is_the_closed_form(method, slips_over):
     inside = middle < slips_over
     np.testing.assert_allclose(axial[inside], (force - TAU * middle)[inside], rtol=0.0,
                                atol=2.0 * E * A / (L / ELEMENTS) * reach)
+    # the Result carries the bar's quantities as a scene's does: its element forces are the
+    # axial forces read here from u, its stresses those over the area
+    np.testing.assert_allclose(result.element_force, axial, rtol=1e-12, atol=1e-9 * force)
+    np.testing.assert_allclose(result.stress, result.element_force / A, rtol=1e-14)
     # the bed's friction on the slipping nodes is at its limit, τ times the tributary length
     tributary = np.full(ELEMENTS + 1, L / ELEMENTS)
     tributary[[0, -1]] /= 2.0

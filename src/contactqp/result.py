@@ -4,6 +4,7 @@ check (:mod:`contactqp.check`) beside what the solver itself claimed."""
 
 from __future__ import annotations
 
+import dataclasses
 import html
 import json
 import math
@@ -384,6 +385,17 @@ def checked(model: ContactModel, solution: Solution, contact: str,
     return Checked(u, lam, forces, reactions, pen, found)
 
 
+def with_bar_quantities(result: Result, layout: Layout) -> Result:
+    """``result`` (of a scene solved as its problem: a frictional bed) with the bar quantities
+    its u gives: each element's force k_e (u_(e+1) − u_e) and stress, and the warning where a
+    stress passes yield. The problem's dofs are the scene's nodes, in its numbering."""
+    forces = element_forces(layout, result.u)
+    stress = forces / layout.areas
+    ratio, warnings = yield_warning(layout, stress)
+    return dataclasses.replace(result, element_force=forces, stress=stress, stress_ratio=ratio,
+                               warnings=result.warnings + tuple(warnings))
+
+
 def make_result(model: ContactModel, solution: Solution, *, method: str, contact: str,
                 options: dict[str, Any], timings: dict[str, float],
                 tolerances: Tolerances = TOLERANCES) -> Result:
@@ -413,4 +425,4 @@ def make_result(model: ContactModel, solution: Solution, *, method: str, contact
 
 
 __all__ = ["Checked", "ProblemResult", "Reported", "Result", "Solution", "checked",
-           "claim_warnings", "make_result", "plain"]
+           "claim_warnings", "make_result", "plain", "with_bar_quantities"]

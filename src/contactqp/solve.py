@@ -21,12 +21,13 @@ from contactqp.feasibility.rows import row_conflict
 from contactqp.methods import Method, checked_options, hull
 from contactqp.methods.base import Solution
 from contactqp.model import Condensed, Model, condensed_model, scene_model
+from contactqp.model.chain import layout_of
 from contactqp.model.chain.floating import unheld_bars
 from contactqp.model.chain.to_problem import problem_from_scene
 from contactqp.model.sparse import problem_model
 from contactqp.problem import Problem
 from contactqp.problem_files import load_problem
-from contactqp.result import Result, make_result
+from contactqp.result import Result, make_result, with_bar_quantities
 from contactqp.scene import Scene
 from contactqp.scene_io import load_scene
 
@@ -136,8 +137,11 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
     """
     if isinstance(scene, (str, os.PathLike)):
         scene = as_target(scene)
-    if isinstance(scene, Scene) and scene.beds:  # friction: solved as the scene's problem
-        scene = problem_from_scene(scene)
+    if isinstance(scene, Scene) and scene.beds:  # friction: solved as the scene's problem,
+        # with the bar quantities of the scene's own numbering
+        found = solve_friction_problem(problem_from_scene(scene), method, contact, formulation,
+                                       previous, options)
+        return with_bar_quantities(found, layout_of(scene))
     if isinstance(scene, Problem) and scene.T is not None:
         return solve_friction_problem(scene, method, contact, formulation, previous, options)
     if previous is not None:
