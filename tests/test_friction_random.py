@@ -172,9 +172,23 @@ class Case:
         u[self.free] = np.linalg.solve(self.K_ff, self.load - self.G.T @ forces)
         return u
 
+    def reactions(self, forces: np.ndarray) -> np.ndarray:
+        """The prescribed dofs' forces for the forces λ: K u − f + Cᵀλ_N + Tᵀλ_T there."""
+        u = self.u(forces)
+        return (self.K @ u - self.f + np.vstack([self.C, self.T]).T @ forces)[self.prescribed]
+
     def u_error(self, force_error: float) -> float:
         """What a force error (2-norm) moves u by at most: ‖K⁻¹Gᵀ‖₂ times it."""
         return float(np.linalg.norm(self.compliance, 2)) * force_error
+
+    def reaction_reach(self, force_error: float) -> float:
+        """What a force error (2-norm) moves a reaction by at most: the reactions are
+        G_pᵀλ − K_pf K⁻¹Gᵀλ + (what λ does not change), so ‖G_pᵀ − K_pf K⁻¹Gᵀ‖₂ times it."""
+        if not self.prescribed.size:
+            return 0.0
+        G_p = np.vstack([self.C, self.T])[:, self.prescribed]
+        K_pf = self.K[np.ix_(self.prescribed, self.free)]
+        return float(np.linalg.norm(G_p.T - K_pf @ self.compliance, 2)) * force_error
 
 
 def random_case(seed: int, d: int) -> Case:
@@ -422,9 +436,14 @@ def assert_visible(result: contactqp.Result, where: str) -> None:
 
 def assert_within_bound(case: Case, result: contactqp.Result, exact: np.ndarray,
                         certified: float, F: float, U: float, where: str) -> None:
-    """The Result's forces and u are within its stated bounds of the exact ones (certified
-    to ``certified`` in the 2-norm of the forces)."""
+    """The Result's forces, its reactions and u are within its stated bounds of the exact
+    ones (certified to ``certified`` in the 2-norm of the forces; the reactions' share of
+    that, ‖K_pf K⁻¹Gᵀ − G_pᵀ‖₂ times it, computed here)."""
     force_error = float(np.abs(forces_of(result) - exact).max())
+    reaction_error = float(np.abs(result.reactions - case.reactions(exact)).max(initial=0.0))
+    reach = case.reaction_reach(certified)
+    assert reaction_error <= result.force_error_bound + reach + ROUND_OFF * F, (
+        where, reaction_error, result.force_error_bound, result.message)
     move_error = float(np.abs(result.u - case.u(exact)).max())
     assert force_error <= result.force_error_bound + certified + ROUND_OFF * F, (
         where, force_error, result.force_error_bound, result.message)

@@ -86,8 +86,9 @@ class FrictionCheck:
         ``"tresca"`` or ``"coulomb"``.
     residuals : FrictionResiduals
     force_error_bound, displacement_error_bound : float
-        How far the answer's forces (force) and displacements (length) are from the exact
-        answer's on the reference's sets; infinite where no reference was found.
+        How far the answer's forces (force: the normal and friction forces and the reactions
+        of the prescribed dofs) and displacements (length) are from the exact answer's on the
+        reference's sets; infinite where no reference was found.
     displacement_scale : float
         U, the largest displacement of the reference (or the answer) on the free dofs.
     verified : bool
@@ -197,13 +198,42 @@ def check(model: FrictionModel, law: Law, answer: FrictionAnswer,
     ref_u, ref_forces, force_error, move_error, changes = found
     F = max(residuals.force_scale, force_scale(model, law, ref_forces))
     U = displacement_scale(model, ref_u, F)
-    force_bound = float(np.abs(answer.forces - ref_forces).max(initial=0.0)) + force_error
+    force_bound = max(float(np.abs(answer.forces - ref_forces).max(initial=0.0)),
+                      reaction_change(model, u_free - ref_u, answer.forces - ref_forces)
+                      ) + force_error + reaction_reach(model, force_error, move_error)
     move_bound = float(np.abs(u_free - ref_u).max(initial=0.0)) + move_error
     verified = (force_bound <= VERIFIED * F and move_bound <= VERIFIED * U
                 and residuals.worst <= VERIFIED)
     verdict = _verdict(law, force_bound / F, move_bound / U)
     return FrictionCheck(law.kind, residuals, force_bound, move_bound, U, verified, changes,
                          verdict, model.full(ref_u), ref_forces)
+
+
+def reaction_change(model: FrictionModel, du: np.ndarray, dlam: np.ndarray) -> float:
+    """The largest change of a reaction (a prescribed dof's force) that changes du of the free
+    dofs and dλ of the forces make: K_pf du + C_pᵀ dλ_N + T_pᵀ dλ_T (force)."""
+    source = model.source
+    change = source.K_fp.T @ du
+    lam_N, lam_T = split(model, dlam)
+    if lam_N is not None and source.C_p is not None:
+        change = change + source.C_p.T @ lam_N
+    change = change + source.T_p.T @ lam_T.ravel()
+    return float(np.abs(change).max(initial=0.0))
+
+
+def reaction_reach(model: FrictionModel, force_error: float, move_error: float) -> float:
+    """How far the reference's own errors (force_error in every force, move_error in every
+    free displacement) can move a reaction: each prescribed dof's row sums of |K_pf| and of
+    its rows' |entries| times them (force)."""
+    source = model.source
+    if not source.K_fp.shape[1]:
+        return 0.0
+    stiff = np.asarray(abs(source.K_fp).sum(axis=0)).ravel()
+    rows = abs(source.T_p).sum(axis=0)
+    if source.C_p is not None:
+        rows = rows + abs(source.C_p).sum(axis=0)
+    return float(stiff.max(initial=0.0)) * move_error + float(
+        np.asarray(rows).ravel().max(initial=0.0)) * force_error
 
 
 def displacement_scale(model: FrictionModel, u_free: np.ndarray, F: float) -> float:
