@@ -53,7 +53,7 @@ from functools import cached_property
 import numpy as np
 import pytest
 import qpsolvers
-from hypothesis import event, given, note, settings
+from hypothesis import event, example, given, note, settings
 from hypothesis import strategies as st
 
 import contactqp
@@ -556,6 +556,9 @@ SLOW_ROUTES = [route for route in TRESCA_ROUTES if route_id(*route) in SLOW]
 @pytest.mark.parametrize("method", EXACT_ROUTES)
 @settings(max_examples=40, deadline=None)
 @given(**TRESCA_EXAMPLES)
+# a slip bound of 1.8e4 no contact reaches set F, and a slip of 4e-4 read as none (the force
+# scale now leaves unreached Tresca bounds out)
+@example(seed=1073741825, d=2, start="rest or drawn")
 def test_the_exact_tresca_route_is_verified_and_within_its_bound(method, seed, d, start):
     """Random Tresca problems in 2D and 3D by the exact route (lagrange, semismooth_newton):
     always verified, its forces and u within the bounds its Result states of the certified

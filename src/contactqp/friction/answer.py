@@ -78,12 +78,17 @@ class FrictionAnswer:
 
 
 def force_scale(model: FrictionModel, law: Law, forces: np.ndarray) -> float:
-    """F: the largest of the loads on the free dofs (the prescribed motion's pull included),
-    the contact forces and the friction bounds (force). Every residual is a fraction of it."""
+    """F: the largest of the loads, the reactions of the prescribed dofs with no contact force
+    (:attr:`FrictionModel.load_scale`: the rule of the frictionless check), the normal and
+    friction forces and, under Coulomb, the bounds μλ_N (force). Every residual is a fraction
+    of it. Tresca's slip bounds are inputs, not forces: one that no contact reaches (a bound
+    of 1.8·10⁴ on a contact that sticks at 15) would set F a thousandfold above every force
+    and let a slip of 4·10⁻⁴ read as none (fresh seed 1073741825 of the random tests); where
+    a contact reaches its bound its friction force counts."""
     lam_N, _ = split(model, forces)
-    return max(float(np.abs(model.load).max(initial=0.0)),
-               float(np.abs(forces).max(initial=0.0)),
-               float(law.bound(lam_N).max(initial=0.0)), 1e-300)
+    bound = law.bound(lam_N) if law.kind == COULOMB else np.zeros(0)
+    return max(model.load_scale, float(np.abs(forces).max(initial=0.0)),
+               float(bound.max(initial=0.0)), 1e-300)
 
 
 def read_sets(model: FrictionModel, law: Law, forces: np.ndarray, reads: np.ndarray) -> Sets:

@@ -1,7 +1,8 @@
 """The check of an answer with friction: the residuals of the law, and an error bound.
 
 **Residuals** (:func:`friction_residuals`), each the worst miss over the contacts as a fraction
-of the force scale F (the largest load on the free dofs, contact force or friction bound); a
+of the force scale F (:func:`~.answer.force_scale`: the loads, the reactions of the
+prescribed dofs with no contact force, the normal and friction forces, Coulomb's μλ_N); a
 length counts as the force its row's stiffness k = 1/W_ii gives it:
 
 - ``equilibrium``: K u − f + Cᵀλ_N + Tᵀλ_T on the free dofs;

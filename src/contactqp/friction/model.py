@@ -125,6 +125,24 @@ class FrictionModel:
         return diagonal <= 1e-14 * diagonal.max(initial=0.0)
 
     @cached_property
+    def load_scale(self) -> float:
+        """The loads' part of the force scale F: the largest load on any dof and the largest
+        reaction of the prescribed dofs with no contact force, R₀ = K_pf u₀ + K_pp u_p − f_p
+        (force). A prescribed motion counts by the force it takes to impose it on the body
+        left free, not by its pull on free dofs held at rest (K_fp u_p, which a rigid motion
+        of the caps makes 10⁴ times the contact forces of the Cattaneo spheres). Where K
+        cannot be factorised (a body held by friction alone) that pull stands in."""
+        source = self.source
+        loads = float(np.abs(source.f).max(initial=0.0))
+        try:
+            u0 = self.unloaded
+        except ProblemError:
+            return max(loads, float(np.abs(self.load).max(initial=0.0)))
+        reactions = (source.K_fp.T @ u0 + source.K_pp @ self.values
+                     - source.f[self.prescribed])
+        return max(loads, float(np.abs(reactions).max(initial=0.0)))
+
+    @cached_property
     def unloaded(self) -> np.ndarray:
         """u₀ = K⁻¹(f − K_fp u_p): the free dofs with no contact force (length)."""
         return self.factor.solve(self.load)
@@ -198,6 +216,7 @@ class _Source:
     K_fp: sp.csr_array
     C_p: sp.csr_array | None
     T_p: sp.csr_array
+    K_pp: sp.csr_array
 
 
 def friction_model(K, f, C, g, T, *, prescribed=None, values=None,
@@ -268,7 +287,7 @@ def friction_model(K, f, C, g, T, *, prescribed=None, values=None,
         C=None if C is None else sp.csr_array(C[:, free]),
         gap=None if C is None else g - C_p @ values,
         T=sp.csr_array(T[:, free]), tangential_shift=T_p @ values,
-        source=_Source(f, g, T, K_fp, C_p, T_p))
+        source=_Source(f, g, T, K_fp, C_p, T_p, sp.csr_array(K[held][:, held])))
 
 
 def problem_friction_model(problem) -> FrictionModel:
