@@ -120,6 +120,24 @@ def test_determinate_chain_solve_is_the_inverse_of_K(support, columns):
                                atol=1e-12 * np.abs(expected).max())
 
 
+@pytest.mark.parametrize("pushed", [1, 5, 16, 17])
+def test_energy_of_a_push_from_the_greens_function_is_the_dense_one(pushed):
+    """pᵀK⁻¹p (the force scale's first step) read from the Green's function of the pushed
+    nodes alone, two bars each held at an inner support, against a dense solve with the
+    assembled K; 17 pushed nodes take the solve path."""
+    rng = np.random.default_rng(pushed)
+    bars = tuple(contactqp.Bar.from_areas(rng.uniform(1e-4, 1e-3, 20), 2e11, length=1.0)
+                 for _ in range(2))
+    scene = contactqp.Scene(bars, (contactqp.Support(7, bar=0), contactqp.Support(12, bar=1)),
+                            (), ())
+    model = build_model(scene)
+    assert model.determinate is not None
+    push = np.zeros(model.n_free)
+    push[rng.choice(model.n_free, size=pushed, replace=False)] = rng.normal(size=pushed)
+    expected = float(push @ np.linalg.solve(model.K.toarray(), push))
+    assert model.energy_of(push) == pytest.approx(expected, rel=1e-12)
+
+
 def test_a_million_element_bar_is_exact_to_round_off():
     """Exact areas: the discrete tip flexibility is the cone's ∫dx/(EA), so the condensed
     contact force equals the continuum closed form up to round-off. Assembling K and

@@ -154,7 +154,7 @@ def row_stiffness(K: sp.sparray, C: sp.csr_array) -> np.ndarray:
 
 
 def first_step_forces(p: np.ndarray, s: np.ndarray, transpose_times: Any,
-                      solve_K: Any) -> np.ndarray:
+                      energy_of: Any) -> np.ndarray:
     """λ₀ = μ S p, μ = pᵀSp / (Sp)ᵀW(Sp), W = C K⁻¹ Cᵀ (one solve): the forces of one
     steepest-descent step, weighted by the rows' stiffness, towards closing the penetrations
     p (module docstring). Zeros where p is."""
@@ -162,7 +162,7 @@ def first_step_forces(p: np.ndarray, s: np.ndarray, transpose_times: Any,
     if not np.any(weighted):
         return np.zeros(p.size)
     push = transpose_times(weighted)  # Cᵀ(S p)
-    flex = float(push @ solve_K(push))
+    flex = energy_of(push)  # pushᵀ K⁺ push
     if not flex > 0.0:
         return np.zeros(p.size)
     return (float(p @ weighted) / flex) * weighted
@@ -342,6 +342,11 @@ class ContactModel(ABC):
         return slice(0, 0) if not free.size else None
 
     # --- the solves
+    def energy_of(self, push: np.ndarray) -> float:
+        """pushᵀ K⁺ push for a force ``push`` on the free dofs (one solve; a model may know a
+        cheaper way)."""
+        return float(push @ self.pseudo_solve(push))
+
     @abstractmethod
     def solve_K(self, rhs: np.ndarray) -> np.ndarray:
         """K⁻¹ rhs (a SolverError where K leaves a mode free)."""

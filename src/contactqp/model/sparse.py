@@ -288,7 +288,7 @@ class SparseModel(ContactModel):
         pen = C @ u0_free - self.g
         passed = np.where(self.equality, np.abs(pen), np.maximum(pen, 0.0))
         contact = first_step_forces(passed, self.row_stiffness, self.C_transpose_times,
-                                    self.pseudo_solve)
+                                    self.energy_of)
         coordinates = problem.coordinates
         extent = (float(np.max(np.ptp(coordinates, axis=0), initial=0.0))
                   if coordinates is not None and coordinates.size else 0.0)

@@ -146,6 +146,22 @@ class Model(ContactModel):
         return tuple((slice(int(first[b]), int(first[b + 1])), support)
                      for b, support in sorted((s.bar, s.node) for s in scene.supports))
 
+    def energy_of(self, push: np.ndarray) -> float:
+        """pushᵀ K⁻¹ push; where every bar is held by one support and few nodes are pushed,
+        from the Green's function G_ij = min(φ_i, φ_j) of the nodes pushed (same bar, same
+        side of its support; :func:`determinate_chain_solve`) with no pass over the chain."""
+        loaded = np.flatnonzero(push)
+        if self.determinate is None or loaded.size > GREEN_ROWS:
+            return super().energy_of(push)
+        side = np.empty(loaded.size, dtype=np.intp)  # one number per bar and side of support
+        for b, (block, support) in enumerate(self.determinate):
+            inside = (loaded >= block.start) & (loaded < block.stop)
+            side[inside] = 2 * b + (loaded[inside] - block.start >= support)
+        phi, force = self.compliance_to_support[loaded], push[loaded]
+        green = np.where(side[:, None] == side[None, :], np.minimum(phi[:, None], phi[None, :]),
+                         0.0)
+        return float(force @ green @ force)
+
     @cached_property
     def compliance_to_support(self) -> np.ndarray:
         """φ per free node when every bar is held by one support: Σ 1/k_e over the elements
@@ -352,7 +368,7 @@ class Model(ContactModel):
             u0 = self.free_displacement_of_nodes
         passed = np.maximum(penetration(layout, u0), 0.0)  # rows of ±1: a length as it is
         contact = first_step_forces(passed, self.row_stiffness, self.C_transpose_times,
-                                    self.pseudo_solve)
+                                    self.energy_of)
         unbalanced = (np.abs(np.bincount(self._floating_groups, self.P)[: len(self.floating)])
                       if self.floating else np.zeros(0))
         reactions = self.reactions_of(u0, np.zeros(self.n_contacts))
