@@ -49,7 +49,6 @@ X free, u₀ = K⁺(P − Cᵀμ), the loads with what they put on X taken up by
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
@@ -128,7 +127,7 @@ def force_scale(terms: ScaleTerms, U: Any) -> Any:
 
 def _plain(terms: ScaleTerms) -> bool:
     """Whether every term is one number, none of them NaN (the batch's are arrays)."""
-    values = dataclasses.astuple(terms)
+    values = tuple(vars(terms).values())  # not dataclasses.astuple: it deep-copies arrays
     return all(isinstance(v, float) for v in values) and not any(map(math.isnan, values))
 
 
