@@ -172,6 +172,15 @@ class Case:
         u[self.free] = np.linalg.solve(self.K_ff, self.load - self.G.T @ forces)
         return u
 
+    def force_scale(self, forces: np.ndarray, bound: np.ndarray | None) -> float:
+        """F of the documented rule: the largest load on any dof, reaction of the prescribed
+        dofs with no contact force (K u₀ − f there, u₀ = K_ff⁻¹(f − K_fp u_p) on the free
+        dofs), force, and Coulomb's bound μλ_N where given; by dense numpy here."""
+        reactions = self.reactions(np.zeros(self.G.shape[0]))
+        return max(float(np.abs(self.f).max(initial=0.0)),
+                   float(np.abs(reactions).max(initial=0.0)), float(np.abs(forces).max()),
+                   0.0 if bound is None else float(bound.max(initial=0.0)), 1e-300)
+
     def reactions(self, forces: np.ndarray) -> np.ndarray:
         """The prescribed dofs' forces for the forces λ: K u − f + Cᵀλ_N + Tᵀλ_T there."""
         u = self.u(forces)
@@ -385,8 +394,7 @@ def law_misses(case: Case, result: contactqp.Result, bound: np.ndarray) -> dict[
     m, d = case.m, case.d
     forces = forces_of(result)
     lam_N, lam_T = forces[:m], forces[m:].reshape(m, d)
-    F = max(float(np.abs(case.load).max(initial=0.0)), float(np.abs(forces).max()),
-            float(bound.max(initial=0.0)), 1e-300)
+    F = case.force_scale(forces, bound if result.friction == "coulomb" else None)
     u_free = result.u[case.free]
     reads = case.G @ u_free - case.targets
     w_N, v = reads[:m], reads[m:].reshape(m, d)
@@ -412,13 +420,14 @@ def law_misses(case: Case, result: contactqp.Result, bound: np.ndarray) -> dict[
 
 def scales(case: Case, result: contactqp.Result, exact: np.ndarray,
            bound_of) -> tuple[float, float]:
-    """(F, U) as the check defines them (docs/friction.md, check.py): F the largest load on the
-    free dofs, contact force or friction bound, of the answer and of the exact forces; U the
-    largest free displacement of the exact answer, prescribed value, or F times the largest
-    row flexibility."""
+    """(F, U) as the check defines them (docs/friction.md, "The force scale"; check.py): F the
+    largest load, reaction of the prescribed dofs with no contact force, normal or friction
+    force and (Coulomb) bound μλ_N, of the answer and of the exact forces; U the largest free
+    displacement of the exact answer, prescribed value, or F times the largest row
+    flexibility."""
     def force_scale(forces):
-        return max(float(np.abs(case.load).max(initial=0.0)), float(np.abs(forces).max()),
-                   float(bound_of(forces[:case.m]).max(initial=0.0)), 1e-300)
+        coulomb = result.friction == "coulomb"
+        return case.force_scale(forces, bound_of(forces[:case.m]) if coulomb else None)
 
     F = max(force_scale(forces_of(result)), force_scale(exact))
     U = max(float(np.abs(case.u(exact)[case.free]).max(initial=0.0)),
