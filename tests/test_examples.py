@@ -61,8 +61,12 @@ CHECKS = {
     # the Hertz numbers are checked in tests/test_fem.py; here: another method, same forces
     "hertz_cylinder": lambda v: (v["result"].contact_force, contactqp.solve(
         v["model"].problem, "semismooth_newton").contact_force),
+    # Cattaneo's closed forms are checked in tests/test_friction_problem.py; here: another
+    # method (the active set on Coulomb's sets), same friction forces at the last shear
+    "cattaneo_cylinders": lambda v: (v["result"].friction_force, contactqp.solve(
+        v["step"], "semismooth_newton", previous=v["pressed"]).friction_force),
 }
-NEEDS = {"hertz_cylinder": "skfem"}  # optional extras an example needs
+NEEDS = {"hertz_cylinder": "skfem", "cattaneo_cylinders": "skfem"}  # optional extras
 
 
 def test_every_example_is_checked():
