@@ -7,9 +7,9 @@ together by P to a contact half-width a ≈ 0.03 R, then pulled sideways by Q < 
 μ = 0.3), the shear reached by moving the caps sideways, each shear an increment from the
 pressed state (``previous=``). Cattaneo and Mindlin's closed forms (Johnson, *Contact
 Mechanics*, §7.1), which hold exactly for identical bodies (Dundurs' β = 0): the stick zone
-|x| < c with c/a = √(1 − Q/(μP)), and the friction traction
+−c < x < c with c/a = √(1 − Q/(μP)), and the friction traction
 
-    q(x) = μp₀ [√(1 − x²/a²) − (c/a) √(1 − x²/c²)]   for |x| < c,   μp(x) outside it,
+    q(x) = μp₀ [√(1 − x²/a²) − (c/a) √(1 − x²/c²)]   for −c < x < c,   μp(x) outside it,
 
 p₀ = 2P/(πa). The model is ``contactqp.friction.cattaneo`` (scikit-fem, 28 340 dofs, the lower
 body the mirror image of the upper, each pair of surface nodes one contact); the chart shows
