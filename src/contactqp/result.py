@@ -385,13 +385,20 @@ def checked(model: ContactModel, solution: Solution, contact: str,
     return Checked(u, lam, forces, reactions, pen, found)
 
 
+def stresses(layout: Layout, forces: np.ndarray) -> tuple[np.ndarray, float | None, list[str]]:
+    """(each element's stress, the largest |stress| / yield stress or None, the warning where
+    it passes 1) of the element forces."""
+    stress = forces / layout.areas
+    ratio, warnings = yield_warning(layout, stress)
+    return stress, ratio, warnings
+
+
 def with_bar_quantities(result: Result, layout: Layout) -> Result:
     """``result`` (of a scene solved as its problem: a frictional bed) with the bar quantities
     its u gives: each element's force k_e (u_(e+1) − u_e) and stress, and the warning where a
     stress passes yield. The problem's dofs are the scene's nodes, in its numbering."""
     forces = element_forces(layout, result.u)
-    stress = forces / layout.areas
-    ratio, warnings = yield_warning(layout, stress)
+    stress, ratio, warnings = stresses(layout, forces)
     return dataclasses.replace(result, element_force=forces, stress=stress, stress_ratio=ratio,
                                warnings=result.warnings + tuple(warnings))
 
@@ -403,10 +410,8 @@ def make_result(model: ContactModel, solution: Solution, *, method: str, contact
     start = time.perf_counter()
     done = checked(model, solution, contact, tolerances)
     found, forces = done.check, done.element_force
-    stress, ratio, warnings = None, None, []
-    if forces is not None:
-        stress = forces / model.layout.areas
-        ratio, warnings = yield_warning(model.layout, stress)
+    stress, ratio, warnings = (None, None, []) if forces is None else stresses(model.layout,
+                                                                             forces)
     timings = {**timings, "check": time.perf_counter() - start}
     warnings += claim_warnings(solution, found.verified)
     return Result(
