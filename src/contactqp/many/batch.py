@@ -83,13 +83,16 @@ def tiled_rows(values: np.ndarray, walls: int) -> np.ndarray:
 
 
 def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
-                gaps: np.ndarray, single: Model | None = None) -> tuple[np.ndarray, np.ndarray]:
+                gaps: np.ndarray, single: Model | None = None,
+                flexibility: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(F, U) of every case of a tiled model, by the one rule of
     :mod:`contactqp.model.base` (``free_displacement`` per case: cases x free nodes; ``gaps``
     cases x rows), each term reduced over the case's own entries; and the tiled model's own F
     and U set by the same rule from the largest of every case's terms (the rule takes maxima:
     they are the tiled model's own, bit for bit, but for λ₀, whose step is per case). A batch
-    holds no bar without a support (:func:`contactqp.methods.load_cases.fits`)."""
+    holds no bar without a support (:func:`contactqp.methods.load_cases.fits`).
+    ``flexibility``: the single model's W = C K⁻¹ Cᵀ where it is formed, which gives each
+    case's (Sp)ᵀW(Sp) without a solve."""
     layout, walls = model.layout, len(model.scene.walls) // cases
     largest = partial(many.row_reduce, np.maximum, initial=0.0)  # each case's largest
     u0 = model.full_displacements(free_displacement.ravel())
@@ -98,12 +101,15 @@ def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
         model.__dict__["row_stiffness"] = tiled_rows(
             np.tile(single.row_stiffness, (cases, 1)), walls)
     weighted = passed * model.row_stiffness
-    # K⁻¹Cᵀ(Sp): the cases do not couple, and each has the case's K (one solve, every column)
-    push = model.C_transpose_times(weighted)
-    rhs = push.reshape(cases, -1)
-    moved = (single.solve_K(rhs.T).T if single is not None else model.solve_K(rhs.ravel())
-             ).ravel()
-    flex = (push * moved).reshape(cases, -1).sum(axis=1)
+    if flexibility is not None:  # (Sp)ᵀW(Sp) of each case, from the case's W
+        each = per_case_rows(weighted, walls, cases)
+        flex = np.einsum("ci,ij,cj->c", each, flexibility, each)
+    else:  # Cᵀ(Sp)·K⁻¹Cᵀ(Sp): the cases do not couple, each has the case's K (one solve)
+        push = model.C_transpose_times(weighted)
+        rhs = push.reshape(cases, -1)
+        moved = (single.solve_K(rhs.T).T if single is not None
+                 else model.solve_K(rhs.ravel())).ravel()
+        flex = (push * moved).reshape(cases, -1).sum(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         mu = np.where(flex > 0.0, per_case_rows(passed * weighted, walls, cases).sum(axis=1)
                       / flex, 0.0)
@@ -215,7 +221,8 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
                         "solved with the batch")
     # the tiled answer checked as one scene, without a natural map over every case's rows
     # (each case's is read from its rows) and without the stresses a Batch does not hold
-    F, U = case_scales(model, cases, solved.free_displacement, gap_cases, prepared.model)
+    F, U = case_scales(model, cases, solved.free_displacement, gap_cases, prepared.model,
+                       prepared.flexibility[1])
     together = checked(model, solution, prepared.contact, natural=False)
     lam = solved.contact_force
     residuals, names = _case_residuals(prepared, together, solved, gap_cases, F, U)

@@ -234,6 +234,13 @@ class Model(ContactModel):
         columns, inverse = self._contact_columns
         rows, _, values = self._entries
         push = np.bincount(inverse, values * contact_force[rows], minlength=columns.size)
+        if links is not None and self._free_run is None and n <= IMBALANCE_BLOCK:
+            # free nodes apart (supports inside the chain: a batch's cases), one block: the
+            # same subtraction N_(j−1) − N_j, read at the free nodes (the links 0 past the ends)
+            ends = np.concatenate(([0.0], links, [0.0]))
+            r = ends[self.free] - ends[self.free + 1] - P
+            r[columns] += push
+            return float(np.abs(r, out=r).max(initial=0.0))
         edges = np.searchsorted(columns, np.arange(0, n + IMBALANCE_BLOCK, IMBALANCE_BLOCK))
         run = self._free_run if links is not None else None
         offset = run.start if run is not None else 0
