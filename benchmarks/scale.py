@@ -10,17 +10,19 @@ Models (contactqp.fem, scikit-fem; R = 10 mm, E = 210 GPa, ν = 0.3, contact zon
             fraction fixed) on meshes refined in fine and growth together, 10⁴ to 9·10⁵ dofs
     dofs3d  the Hertz sphere, δ = 10 µm (a ≈ 0.63 of the zone), on the levels of
             benchmarks/hertz3d.py, 1.3·10⁴ to 9·10⁴ dofs
-    rows2d  one cylinder mesh (6.6·10⁴ dofs, 2 044 rows), δ from 0.15 µm to 40 µm: 10² to
-            about 1 900 rows in contact
+    rows2d  one cylinder mesh (3.3·10⁵ dofs, 10 272 rows, the finest 6.25 nm at the lowest
+            point), δ from 6·10⁻⁵ µm to 40 µm: 88 to 10 236 rows in contact (at 40 µm the
+            contact passes the zone: every row of it holds)
     rows3d  one sphere mesh, δ from 1 µm to 20 µm: 10² rows in contact to most of its rows
 
-Runs on each: contactqp.solve by lagrange, penalty, augmented and qp (its default backend),
-end to end (model, method, check); and Clarabel, OSQP and PIQP called directly (through
+Runs on each: contactqp.solve by lagrange, semismooth_newton, pgs (its sweeps in its cell; it
+forms the dense W, and is refused past that size), penalty, augmented and qp (its default
+backend), end to end (model, method, check); and Clarabel, OSQP and PIQP called directly (through
 qpsolvers, at their default settings) on the same QP written on the free dofs, minimise
 ½ xᵀK_ff x + (K_fp u_p − f_f)ᵀx subject to C_f x ≤ g − C_p u_p, timed from the Problem's
 arrays to the solver's answer; each peer's answer is then judged by the same check,
 contactqp.check(problem, u, contact_force), outside its time. Each run goes to a forked child
-stopped after TIMEOUT s; a run stopped so is not started again on the sweep's larger cases,
+stopped after TIMEOUT s or FLOOR_TIMES times the case's floor, the longer; a run stopped so is not started again on the sweep's larger cases,
 and no run starts once the whole run's BUDGET is spent (each skip with its reason).
 
 The floor of each mesh: the fastest factor-and-solve of K on the free dofs available here,
@@ -53,8 +55,10 @@ from cases import in_child, machine
 
 TIMEOUT = {False: 60.0, True: 10.0}  # s per run (full, --quick)
 BUDGET = {False: 2400.0, True: 75.0}  # s: no run starts after this much of the whole run
+FLOOR_TIMES = 10.0  # ... or this many times the case's floor, where that is longer
 ZONE, APPROACH = 0.5, 0.01  # mm: the contact zone's (half-)width, δ
-METHODS = ("lagrange", "penalty", "augmented", "qp")
+METHODS = ("lagrange", "semismooth_newton", "pgs", "penalty", "augmented", "qp")
+SHORT = {"semismooth_newton": "ssn"}  # the table's column names
 PEERS = ("clarabel", "osqp", "piqp")
 
 
@@ -91,8 +95,8 @@ def level(k: int) -> Mesh:
 
 
 SMALL2D, SMALL3D = Mesh(2, ZONE / 50, 0.1), level(1)  # 8 754 and 5 106 dofs
-ROWS2D = Mesh(2, ZONE / 4000, 0.2)  # 65 894 dofs, 2 044 rows (finest at x = 0)
-ROWS2D_APPROACHES = (2e-5, 2e-4, 1.5e-3, 0.012)  # mm: 117 rows in contact at the first
+ROWS2D = Mesh(2, ZONE / 80000, 0.2)  # 330 752 dofs, 10 272 rows (finest at x = 0)
+ROWS2D_APPROACHES = (6e-8, 1e-6, 1e-5, 1e-4, 0.04)  # mm: 88 to 10 236 rows in contact
 ROWS3D = Mesh(3, 0.02, 0.6)  # 16 233 dofs, 985 rows
 CASES = (
     Case("dofs2d", SMALL2D, APPROACH, "both"),
@@ -229,6 +233,7 @@ def method(problem: contactqp.Problem, name: str) -> dict[str, Any]:
             "check_seconds": result.timings.get("check", float("nan")),
             "verified": bool(result.verified and result.physical),
             "claimed_success": bool(result.claimed_success), "why": result.message[:200],
+            "iterations": int(result.iterations),
             "contact_force": np.asarray(result.contact_force)}
 
 
@@ -297,7 +302,10 @@ def measure_case(case: Case, problem: contactqp.Problem, progress: Progress) -> 
     print(f"{case.sweep}: {problem.n} dofs, {problem.m} rows, δ = {case.approach * 1e3:g} µm, "
           f"floor {base:.3f} s ({described['floor']})", flush=True)
     runs, forces = {}, []
-    limit = progress.limit
+    # a run may take FLOOR_TIMES floors where that is past the limit: the largest meshes'
+    # floors alone take tens of seconds
+    limit = max(progress.limit, FLOOR_TIMES * base)
+    described["timeout_seconds"] = limit
     for label in (*METHODS, *PEERS):
         reason = progress.why_skip(case, label)
         found = {"skipped": reason} if reason else isolated(limit, problem, label)
@@ -322,25 +330,29 @@ def line(label: str, found: dict[str, Any]) -> str:
             f"verified {found['verified']}")
 
 
-def cell(found: dict[str, Any]) -> str:
+def cell(found: dict[str, Any], label: str = "") -> str:
     if "seconds" not in found:
         reason = found.get("skipped") or "refused"
+        if "contact rows" in reason:  # a size refusal: say the size
+            return "refused (size)"
         return ("time limit" if "time limit" in reason else "not run (budget)"
                 if "budget" in reason else reason.split(":")[0])
-    return f"{found['ratio']:.3g}×" + (" ✓" if found["verified"] else " ✗")
+    sweeps = f" ({found['iterations']:,} sweeps)" if label == "pgs" else ""
+    return f"{found['ratio']:.3g}×" + (" ✓" if found["verified"] else " ✗") + sweeps
 
 
 def table(cases: list[dict[str, Any]]) -> str:
     """Markdown: one line per case, each run's time over the floor and its verdict."""
     labels = (*METHODS, *PEERS)
     head = ("| sweep | dofs | rows | in contact | floor (s) | "
-            + " | ".join(f"{label}" for label in labels) + " |")
+            + " | ".join(SHORT.get(label, label) for label in labels) + " |")
     lines = [head, "|---" * (5 + len(labels)) + "|"]
     for c in cases:
         lines.append(f"| {c['sweep']} | {c['dofs']:,} | {c['rows']:,} | "
                      f"{c['in_contact'] if c['in_contact'] is not None else '–'} | "
                      f"{c['floor_seconds']:.3g} | "
-                     + " | ".join(cell(c["runs"][label]) for label in labels) + " |")
+                     + " | ".join(cell(c["runs"].get(label, {"skipped": "not run"}), label)
+                                  for label in labels) + " |")
     return ("\n".join(lines).replace(",", " ") + "\n\nEach cell: time / the floor (the fastest "
             "factor-and-solve of K on the free dofs in the same run); ✓ verified by "
             "contactqp's check, ✗ not verified. contactqp's methods end to end with their "
@@ -348,7 +360,8 @@ def table(cases: list[dict[str, Any]]) -> str:
             "check apart.\n")
 
 
-COLOURS = {"lagrange": "tab:blue", "penalty": "tab:orange", "augmented": "tab:green",
+COLOURS = {"lagrange": "tab:blue", "semismooth_newton": "tab:cyan", "pgs": "tab:olive",
+           "penalty": "tab:orange", "augmented": "tab:green",
            "qp": "tab:purple", "clarabel": "tab:red", "osqp": "tab:brown", "piqp": "tab:gray"}
 
 
@@ -371,7 +384,7 @@ def chart(cases: list[dict[str, Any]], kind: str, path: Path) -> None:
             continue
         for label, colour in COLOURS.items():
             points = [(xi, c["runs"][label]) for xi, c in zip(x, chosen)
-                      if "seconds" in c["runs"][label]]
+                      if "seconds" in c["runs"].get(label, {})]
             if not points:
                 continue
             ax.plot([p[0] for p in points], [p[1]["seconds"] for p in points], "-",
