@@ -288,7 +288,8 @@ class Progress:
         return None
 
 
-def measure_case(case: Case, problem: contactqp.Problem, progress: Progress) -> dict[str, Any]:
+def measure_case(case: Case, problem: contactqp.Problem, progress: Progress,
+                 labels: tuple[str, ...] = (*METHODS, *PEERS)) -> dict[str, Any]:
     """The case's floors and one entry per run."""
     if case.mesh.key not in progress.floors:
         progress.floors[case.mesh.key] = floors(problem, 1 if problem.n > 2e5 else 3,
@@ -306,7 +307,7 @@ def measure_case(case: Case, problem: contactqp.Problem, progress: Progress) -> 
     # floors alone take tens of seconds
     limit = max(progress.limit, FLOOR_TIMES * base)
     described["timeout_seconds"] = limit
-    for label in (*METHODS, *PEERS):
+    for label in labels:
         reason = progress.why_skip(case, label)
         found = {"skipped": reason} if reason else isolated(limit, problem, label)
         if "seconds" in found:
@@ -422,6 +423,8 @@ def main() -> None:
     parser.add_argument("--out", default="benchmarks/out/scale", help="output folder")
     parser.add_argument("--cache", default="", help="built problems (default OUT/problems)")
     parser.add_argument("--sweeps", default="dofs2d,dofs3d,rows2d,rows3d")
+    parser.add_argument("--runs", default=",".join((*METHODS, *PEERS)),
+                        help="the runs to make on each case (the others are left out)")
     parser.add_argument("--timeout", type=float, default=0.0,
                         help=f"s per run (default {TIMEOUT[False]:g}, --quick {TIMEOUT[True]:g})")
     parser.add_argument("--redraw", default="",
@@ -443,7 +446,8 @@ def main() -> None:
     chosen = [c for c in CASES if c.sweep in sweeps and c.runs_in in wanted]
     warm_up(problem_of(CASES[0], cache))
     progress = Progress(limit, start + budget)
-    cases = [measure_case(c, problem_of(c, cache), progress) for c in chosen]
+    labels = tuple(label for label in (*METHODS, *PEERS) if label in args.runs.split(","))
+    cases = [measure_case(c, problem_of(c, cache), progress, labels) for c in chosen]
     out.mkdir(parents=True, exist_ok=True)
     document = {"machine": machine(), "quick": args.quick, "timeout_seconds": limit,
                 "budget_seconds": budget, "cases": cases}

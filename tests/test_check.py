@@ -307,3 +307,42 @@ def test_a_tiny_pull_through_a_soft_row_counts_as_the_move_it_makes(front):
     assert error == pytest.approx(scene.walls[0].gap)  # by construction
     assert found.displacement_error_bound >= error * (1 - 1e-6)
     assert not found.verified
+
+
+def test_a_wrong_answer_on_many_rows_is_refused_after_a_few_rows_own_stiffness(monkeypatch):
+    """Each row's own stiffness s = 1/W_ii is a solve on a user's model; an answer past its
+    tolerance on many rows is refused once one row is past it with its own s, the others
+    keeping their bounds s̄ ≥ s. Springs in parallel, K = diag(k), one row u_i >= g_i per dof
+    (c_i = −1, g_i = −0.01): s_i = k_i exactly (W_ii = 1/k_i), so the answer u = 0, λ = 0
+    passes every row by 0.01 and its feasibility residual is max k_i · 0.01 / F (closed form,
+    F = ‖f‖∞ here: no support). The verdict and that residual are those of reading every row,
+    but from the first FIRST_ROWS rows only (4 here, of 40); without the limits every row's
+    own s is read."""
+    import importlib
+
+    import scipy.sparse as sp
+
+    from contactqp.model.sparse import problem_model
+
+    residuals_module = importlib.import_module("contactqp.check.residuals")
+
+    rng = np.random.default_rng(3)
+    n = 40
+    k = rng.uniform(1.0, 5.0, n)
+    f = rng.uniform(0.5, 1.0, n)  # pushes every dof away from its row: no contact force
+    problem = contactqp.Problem(sp.diags_array(k).tocsr(), f,
+                                sp.csr_array(-sp.eye_array(n)), np.full(n, -0.01))
+    monkeypatch.setattr(residuals_module, "FIRST_ROWS", 4)
+    model = problem_model(problem)
+    asked = []
+    seen = type(model).seen_stiffness
+    monkeypatch.setattr(type(model), "seen_stiffness",
+                        lambda self, rows: asked.append(rows.size) or seen(self, rows))
+    found = contactqp.check(model, np.zeros(n), np.zeros(n))
+    assert not found.verified
+    assert asked[0] == 4  # the residuals' read (the on-set certificate asks for its own rows)
+    assert found.residuals["feasibility"] == pytest.approx(
+        (k * 0.01).max() / np.abs(f).max(), rel=1e-12)
+    asked.clear()
+    residuals_module.residuals(model, np.zeros(n), np.zeros(n), np.zeros(n, dtype=bool))
+    assert asked == [n]

@@ -145,3 +145,30 @@ def test_other_gaps_share_the_sets_not_their_answers():
     assert np.abs(shared.contact_force - afresh.contact_force).max() <= (
         shared.force_error_bound + afresh.force_error_bound)
     assert shared.contact_force.sum() < first.contact_force.sum()  # wider gaps: less load
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_row_flexibility_in_blocks_equals_the_dense_inverse(seed, monkeypatch):
+    """The rows' own stiffness 1/W_ii (the check's) and W_AA are formed a block of solved
+    columns at a time, so that 10⁴ rows on 3.3·10⁵ dofs do not ask for K⁻¹Cᵀ at once (25 GiB;
+    the check of a peer's answer ran out of memory there). With blocks of 3 columns here, both
+    equal C K⁻¹ Cᵀ from the dense inverse of K (LAPACK) to 1e-12."""
+    from contactqp.model import sparse as sparse_module
+
+    rng = np.random.default_rng(seed)
+    n, m = 30, 10
+    K = spring_chain(n, rng)
+    C = np.zeros((m, n))
+    for i in range(m):
+        dofs = rng.choice(n, int(rng.integers(1, 4)), replace=False)
+        C[i, dofs] = rng.choice([-1.0, 1.0, 2.0], dofs.size)
+    model = build_sparse_model(contactqp.Problem(K, rng.uniform(-1, 1, n), sp.csr_array(C),
+                                                 rng.uniform(0.0, 0.1, m)))
+    assert isinstance(model.factor, CholmodK)
+    monkeypatch.setattr(sparse_module, "SOLVE_BLOCK", 3 * n)
+    W = C @ np.linalg.inv(K.toarray()) @ C.T
+    rows = np.array([7, 0, 3, 9, 4, 2, 8])  # any order, more rows than a block
+    seen = model.seen_stiffness(rows)
+    assert np.abs(seen * np.diagonal(W)[rows] - 1.0).max() <= 1e-12
+    formed = model.flexibility(rows)
+    assert np.abs(formed - W[np.ix_(rows, rows)]).max() <= 1e-12 * np.abs(W).max()

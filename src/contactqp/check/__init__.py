@@ -59,7 +59,9 @@ def check_model(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, contac
     lam = np.asarray(lam, dtype=float).reshape(-1)
     if not (np.isfinite(u_free).all() and np.isfinite(lam).all()):
         return not_finite(model, equality, lam)
-    found, pen = residuals(model, u_free, lam, equality, imbalance)
+    F = model.force_scale
+    found, pen = residuals(model, u_free, lam, equality, imbalance,
+                           (tolerances.feasibility * F, tolerances.complementarity * F))
     found["natural_map"] = (natural_residual(model, lam, pen, equality) if natural
                             else None if equality.any() or model.singular else np.nan)
     passing = all(value is None or value <= getattr(tolerances, name)

@@ -96,7 +96,8 @@ ORDER = ("equilibrium", "feasibility", "complementarity", "sign", "force", "disp
 
 
 def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality: np.ndarray,
-              imbalance: float | None = None) -> tuple[dict[str, float | None], np.ndarray]:
+              imbalance: float | None = None, limits: tuple[float, float] | None = None
+              ) -> tuple[dict[str, float | None], np.ndarray]:
     """(the residuals of the module docstring but force and displacement, the penetration)
     of an answer (free-dof displacements, one force per row); ``equality`` per row.
     ``imbalance``: ‖K u − P + Cᵀλ‖∞ where the caller has worked it out (a chain, from the
@@ -104,7 +105,12 @@ def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality
 
     Each row's force residuals are read first with the bound s̄ ≥ s (no solve); only where
     one of them passes SIGNIFICANT of F (or is not a number) are they read again with the
-    row's own s (:meth:`~contactqp.model.base.ContactModel.seen_stiffness`)."""
+    row's own s (:meth:`~contactqp.model.base.ContactModel.seen_stiffness`). ``limits``: the
+    feasibility and complementarity residuals (forces) past which the answer is not verified
+    whatever the other rows: the rows are then read again largest bound first, FIRST_ROWS and
+    four times as many each time after, and once a row passes its limit with its own s the
+    rest keep their bounds (upper bounds: the verdict is decided, and on a sparse model each
+    row's s is a solve; an answer 1e-4 off on 10⁴ rows and 3.3·10⁵ dofs asked 10⁴ solves)."""
     F = model.force_scale
     pen = model.C_times(u_free)
     pen -= model.g
@@ -126,13 +132,25 @@ def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality
     top_passed = np.maximum.reduce(passed, initial=0.0)  # NaN where a row's is
     top_both = np.maximum.reduce(both, initial=0.0)
     if not (top_passed <= SIGNIFICANT * F and top_both <= SIGNIFICANT * F):
-        rows = np.flatnonzero(~(np.maximum(passed, both) <= SIGNIFICANT * F))
-        s = model.seen_stiffness(rows)
-        p = pen[rows]
-        past = np.where(equality[rows], np.abs(p), np.maximum(p, 0.0))
-        standing = np.where(equality[rows], 0.0, np.maximum(-p, 0.0))
-        passed[rows] = past * s
-        both[rows] = np.minimum(pushing[rows], standing * s)
+        largest = np.maximum(passed, both)
+        rows = np.flatnonzero(~(largest <= SIGNIFICANT * F))
+        size = rows.size
+        if limits is not None and rows.size > FIRST_ROWS:  # largest bound first (NaN first)
+            rows = rows[np.argsort(-np.nan_to_num(largest[rows], nan=np.inf), kind="stable")]
+            size = FIRST_ROWS
+        start = 0
+        while start < rows.size:
+            chunk = rows[start:start + size]
+            s = model.seen_stiffness(chunk)
+            p = pen[chunk]
+            past = np.where(equality[chunk], np.abs(p), np.maximum(p, 0.0))
+            standing = np.where(equality[chunk], 0.0, np.maximum(-p, 0.0))
+            passed[chunk] = past * s
+            both[chunk] = np.minimum(pushing[chunk], standing * s)
+            start, size = start + size, 4 * size
+            if limits is not None and (np.fmax.reduce(passed[chunk], initial=0.0) > limits[0]
+                                       or np.fmax.reduce(both[chunk], initial=0.0) > limits[1]):
+                break  # not verified whatever the rest: they keep their bounds
         top_passed = np.fmax.reduce(passed, initial=0.0)  # 0·∞ counts 0
         top_both = np.fmax.reduce(both, initial=0.0)
     found: dict[str, float | None] = {
@@ -147,6 +165,7 @@ def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality
 
 
 SIGNIFICANT = 1e-9  # of F: a row whose residual s̄ puts below this needs no solve for its s
+FIRST_ROWS = 256  # rows read with their own s first, where limits say when to stop
 
 
 def natural_residual(model: ContactModel, lam: np.ndarray, pen: np.ndarray,

@@ -69,6 +69,7 @@ from contactqp.model.singular import (
 from contactqp.problem import Problem
 
 EINSUM_WORK = 10**8  # multiply-adds up to which W is formed by einsum rather than BLAS
+SOLVE_BLOCK = 2**25  # entries of a block of solved columns K⁻¹C_rowsᵀ (256 MB)
 
 
 @dataclass(frozen=True, eq=False)
@@ -133,7 +134,11 @@ class SparseModel(ContactModel):
             if not rows.size:
                 return np.zeros((0, 0))
             C_rows = self.C[rows]
-            W = C_rows @ self.factor.solve(C_rows.T.toarray())
+            W = np.empty((rows.size, rows.size))
+            block = max(1, SOLVE_BLOCK // max(self.n_free, 1))  # columns solved at a time
+            for start in range(0, rows.size, block):
+                W[:, start:start + block] = C_rows @ self.factor.solve(
+                    C_rows[start:start + block].T.toarray())
             cache.solves += rows.size
             return 0.5 * (W + W.T)
         new = [int(i) for i in dict.fromkeys(rows.tolist()) if int(i) not in cache.where]
@@ -205,9 +210,15 @@ class SparseModel(ContactModel):
         rows = np.asarray(rows, dtype=np.intp)
         if not rows.size:
             return np.zeros(0)
-        if isinstance(self.factor, CholmodK):  # one solve per row: only the rows asked for
-            compliance = np.einsum("ij,ji->i", self.C[rows].toarray(),
-                                   self.factor.solve(self.C[rows].T.toarray()))
+        if isinstance(self.factor, CholmodK):  # one solve per row: only the rows asked for,
+            # a block of columns at a time (K⁻¹C_rowsᵀ of 10⁴ rows on 3.3·10⁵ dofs: 25 GiB)
+            compliance = np.empty(rows.size)
+            block = max(1, SOLVE_BLOCK // max(self.n_free, 1))
+            for start in range(0, rows.size, block):
+                C_block = self.C[rows[start:start + block]]
+                moved = self.factor.solve(C_block.T.toarray())
+                compliance[start:start + block] = np.asarray(
+                    C_block.multiply(moved.T).sum(axis=1)).reshape(-1)
         elif self.factor is not None:
             compliance = np.diagonal(self.flexibility(rows)).copy()
         else:
