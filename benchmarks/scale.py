@@ -22,7 +22,8 @@ qpsolvers, at their default settings) on the same QP written on the free dofs, m
 ½ xᵀK_ff x + (K_fp u_p − f_f)ᵀx subject to C_f x ≤ g − C_p u_p, timed from the Problem's
 arrays to the solver's answer; each peer's answer is then judged by the same check,
 contactqp.check(problem, u, contact_force), outside its time. Each run goes to a forked child
-stopped after TIMEOUT s or FLOOR_TIMES times the case's floor, the longer; a run stopped so is not started again on the sweep's larger cases,
+stopped after TIMEOUT s or FLOOR_TIMES times the case's floor, the longer (a peer's run
+CHECK_ALLOWANCE s more, for the check of its answer); a run stopped so is not started again on the sweep's larger cases,
 and no run starts once the whole run's BUDGET is spent (each skip with its reason).
 
 The floor of each mesh: the fastest factor-and-solve of K on the free dofs available here,
@@ -56,6 +57,7 @@ from cases import in_child, machine
 TIMEOUT = {False: 60.0, True: 10.0}  # s per run (full, --quick)
 BUDGET = {False: 2400.0, True: 75.0}  # s: no run starts after this much of the whole run
 FLOOR_TIMES = 10.0  # ... or this many times the case's floor, where that is longer
+CHECK_ALLOWANCE = 60.0  # s more for a peer's run: the check of its answer, outside its time
 ZONE, APPROACH = 0.5, 0.01  # mm: the contact zone's (half-)width, δ
 METHODS = ("lagrange", "semismooth_newton", "pgs", "penalty", "augmented", "qp")
 SHORT = {"semismooth_newton": "ssn"}  # the table's column names
@@ -309,7 +311,9 @@ def measure_case(case: Case, problem: contactqp.Problem, progress: Progress,
     described["timeout_seconds"] = limit
     for label in labels:
         reason = progress.why_skip(case, label)
-        found = {"skipped": reason} if reason else isolated(limit, problem, label)
+        # a peer's limit is on its solve: its check, after, has CHECK_ALLOWANCE more
+        allowed = limit + (CHECK_ALLOWANCE if label in PEERS else 0.0)
+        found = {"skipped": reason} if reason else isolated(allowed, problem, label)
         if "seconds" in found:
             found["ratio"] = found["seconds"] / base
             if found["verified"]:

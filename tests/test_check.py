@@ -317,7 +317,7 @@ def test_a_wrong_answer_on_many_rows_is_refused_after_a_few_rows_own_stiffness(m
     passes every row by 0.01 and its feasibility residual is max k_i · 0.01 / F (closed form,
     F = ‖f‖∞ here: no support). The verdict and that residual are those of reading every row,
     but from the first FIRST_ROWS rows only (4 here, of 40); without the limits every row's
-    own s is read."""
+    own s is read. Before, the check of a peer's answer at 10⁴ rows ran for minutes."""
     import importlib
 
     import scipy.sparse as sp
@@ -340,7 +340,9 @@ def test_a_wrong_answer_on_many_rows_is_refused_after_a_few_rows_own_stiffness(m
                         lambda self, rows: asked.append(rows.size) or seen(self, rows))
     found = contactqp.check(model, np.zeros(n), np.zeros(n))
     assert not found.verified
-    assert asked[0] == 4  # the residuals' read (the on-set certificate asks for its own rows)
+    # the residuals' read; the on-set certificate's reference pulls on every row by more
+    # than its ACCEPT of F, so it lets them go with no row's own s
+    assert asked == [4]
     assert found.residuals["feasibility"] == pytest.approx(
         (k * 0.01).max() / np.abs(f).max(), rel=1e-12)
     asked.clear()

@@ -50,7 +50,9 @@ def reference(model: ContactModel, lam: np.ndarray, pen: np.ndarray, equality: n
             return None
         u_ref, lam_ref, force, move = refined
         pen_ref = model.C @ u_ref - model.g
-        give = _give(model, np.where(active & ~equality, lam_ref, 0.0))
+        # only a pull within ACCEPT of F can be in the set for its give alone
+        slight = active & ~equality & (lam_ref >= -ACCEPT * F)
+        give = _give(model, np.where(slight, lam_ref, 0.0), ACCEPT * U)
         # a pull counts as a force, and as the displacement letting it go makes (a soft row:
         # random_scenes seed 2026, scene 623, a wall held 9.6e-11 F below 0 through an element
         # of 1.6e5 N/m moved its bar 5.9e-12 m, 1.6e-4 U, and the bound said 4.5e-9 U)
@@ -67,12 +69,19 @@ def reference(model: ContactModel, lam: np.ndarray, pen: np.ndarray, equality: n
     return None
 
 
-def _give(model: ContactModel, lam: np.ndarray) -> np.ndarray:
+def _give(model: ContactModel, lam: np.ndarray, beyond: float = math.inf) -> np.ndarray:
     """How far each row with a force below 0 moves when that force is let go: the force over
     the stiffness the row sees, 1/W_ii (at least what it sees with other rows held as well);
-    infinite where the row moves a mode K leaves free, 0 on the other rows."""
+    infinite where the row moves a mode K leaves free, 0 on the other rows. Where the force
+    over the bound s̄ ≥ 1/W_ii already passes ``beyond``, that lower bound, with no solve (on
+    a sparse model each row's 1/W_ii is one)."""
     give = np.zeros(lam.size)
-    negative = np.flatnonzero(lam < 0.0)
+    bound = np.asarray(model.row_stiffness)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        least = np.where((lam < 0.0) & (bound > 0.0), -lam / bound, 0.0)
+    far = np.isfinite(least) & (least > beyond)
+    give[far] = least[far]
+    negative = np.flatnonzero((lam < 0.0) & ~far)
     if negative.size:
         stiffness = model.seen_stiffness(negative)
         with np.errstate(divide="ignore"):
