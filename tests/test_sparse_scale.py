@@ -32,6 +32,16 @@ def spring_chain(n: int, rng: np.random.Generator) -> sp.csr_array:
     return sp.csr_array(sp.diags([-k[1:-1], main, -k[1:-1]], [-1, 0, 1]))
 
 
+def random_rows(m: int, n: int, most: int, values: tuple[float, ...],
+                rng: np.random.Generator) -> np.ndarray:
+    """m dense rows over n dofs, each on 1 to ``most`` dofs with entries from ``values``."""
+    C = np.zeros((m, n))
+    for i in range(m):
+        dofs = rng.choice(n, int(rng.integers(1, most + 1)), replace=False)
+        C[i, dofs] = rng.choice(values, dofs.size)
+    return C
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_set_solve_equals_the_dense_saddle_point_system(seed):
     """Rows of 1-4 dofs each (CᵀC adds entries off K's pattern): the augmented set solve
@@ -41,10 +51,7 @@ def test_set_solve_equals_the_dense_saddle_point_system(seed):
     rng = np.random.default_rng(seed)
     n, m = 40, 12
     K = spring_chain(n, rng)
-    C = np.zeros((m, n))
-    for i in range(m):
-        dofs = rng.choice(n, int(rng.integers(1, 5)), replace=False)
-        C[i, dofs] = rng.choice([-2.0, -1.0, 1.0, 2.0], dofs.size)
+    C = random_rows(m, n, 4, (-2.0, -1.0, 1.0, 2.0), rng)
     f = rng.uniform(-1.0, 1.0, n)
     g = rng.uniform(-0.1, 0.1, m)
     model = build_sparse_model(contactqp.Problem(K, f, sp.csr_array(C), g))
@@ -158,10 +165,7 @@ def test_row_flexibility_in_blocks_equals_the_dense_inverse(seed, monkeypatch):
     rng = np.random.default_rng(seed)
     n, m = 30, 10
     K = spring_chain(n, rng)
-    C = np.zeros((m, n))
-    for i in range(m):
-        dofs = rng.choice(n, int(rng.integers(1, 4)), replace=False)
-        C[i, dofs] = rng.choice([-1.0, 1.0, 2.0], dofs.size)
+    C = random_rows(m, n, 3, (-1.0, 1.0, 2.0), rng)
     model = build_sparse_model(contactqp.Problem(K, rng.uniform(-1, 1, n), sp.csr_array(C),
                                                  rng.uniform(0.0, 0.1, m)))
     assert isinstance(model.factor, CholmodK)
