@@ -15,20 +15,22 @@ Models (contactqp.fem, scikit-fem; R = 10 mm, E = 210 GPa, ν = 0.3, contact zon
             contact passes the zone: every row of it holds)
     rows3d  one sphere mesh, δ from 1 µm to 20 µm: 10² rows in contact to most of its rows
 
-Runs on each: contactqp.solve by lagrange, semismooth_newton, pgs (its sweeps in its cell; it
-forms the dense W, and is refused past that size), penalty, augmented and qp (its default
-backend), end to end (model, method, check); and Clarabel, OSQP and PIQP called directly (through
-qpsolvers, at their default settings) on the same QP written on the free dofs, minimise
-½ xᵀK_ff x + (K_fp u_p − f_f)ᵀx subject to C_f x ≤ g − C_p u_p, timed from the Problem's
-arrays to the solver's answer; each peer's answer is then judged by the same check,
+Runs on each: contactqp.solve by lagrange, semismooth_newton, pgs (its sweeps in its cell;
+it forms the dense W, and is refused past that size), penalty, augmented and qp (its default
+backend), end to end (model, method, check); and Clarabel, OSQP and PIQP called directly
+(through qpsolvers, at their default settings) on the same QP written on the free dofs,
+minimise ½ xᵀK_ff x + (K_fp u_p − f_f)ᵀx subject to C_f x ≤ g − C_p u_p, timed from the
+Problem's arrays to the solver's answer; each peer's answer is then judged by the same check,
 contactqp.check(problem, u, contact_force), outside its time. Each run goes to a forked child
 stopped after TIMEOUT s or FLOOR_TIMES times the case's floor, the longer (a peer's run
-CHECK_ALLOWANCE s more, for the check of its answer); a run stopped so is not started again on the sweep's larger cases,
-and no run starts once the whole run's BUDGET is spent (each skip with its reason).
+CHECK_ALLOWANCE s more, for the check of its answer); a run stopped so is not started again on
+the sweep's larger cases, and no run starts once the whole run's BUDGET is spent (each skip
+with its reason).
 
 The floor of each mesh: the fastest factor-and-solve of K on the free dofs available here,
 measured in the same run: SuperLU with COLAMD, SuperLU with minimum degree in symmetric mode,
-and qdldl's LDLᵀ (with AMD), where installed. Every time is also a ratio to it.
+qdldl's LDLᵀ (with AMD) and CHOLMOD through cvxopt, where installed. Every time is also a
+ratio to it.
 
 Built problems are kept in the cache folder (default DIR/problems) as .npz, so a second run
 does not mesh again. Writes scale.json, table.md, time_vs_dofs.png and time_vs_rows.png to DIR

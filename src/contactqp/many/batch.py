@@ -82,38 +82,30 @@ def tiled_rows(values: np.ndarray, walls: int) -> np.ndarray:
     return np.concatenate((values[:, :walls].ravel(), values[:, walls:].ravel()))
 
 
-def case_scales(model: Model, cases: int, free_displacement: np.ndarray,
-                gaps: np.ndarray, single: Model | None = None,
-                flexibility: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def case_scales(model: Model, cases: int, free_displacement: np.ndarray, gaps: np.ndarray,
+                single: Model, flexibility: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(F, U) of every case of a tiled model, by the one rule of
     :mod:`contactqp.model.base` (``free_displacement`` per case: cases x free nodes; ``gaps``
     cases x rows), each term reduced over the case's own entries; and the tiled model's own F
     and U set by the same rule from the largest of every case's terms (the rule takes maxima:
     they are the tiled model's own, bit for bit, but for λ₀, whose step is per case). A batch
-    holds no bar without a support (:func:`contactqp.methods.load_cases.fits`).
-    ``flexibility``: the single model's W = C K⁻¹ Cᵀ where it is formed, which gives each
-    case's (Sp)ᵀW(Sp) without a solve."""
+    holds no bar without a support (:func:`contactqp.methods.load_cases.fits`). ``single``:
+    the model of one case, and ``flexibility`` its W = C K⁻¹ Cᵀ (the prepared model's), which
+    gives each case's (Sp)ᵀW(Sp) without a solve."""
     layout, walls = model.layout, len(model.scene.walls) // cases
     largest = partial(many.row_reduce, np.maximum, initial=0.0)  # each case's largest
     u0 = model.full_displacements(free_displacement.ravel())
     passed = np.maximum(penetration(layout, u0), 0.0)
-    if single is not None:  # every case's rows see its K: the case's own row stiffness
-        model.__dict__["row_stiffness"] = tiled_rows(
-            np.tile(single.row_stiffness, (cases, 1)), walls)
+    # every case's rows see its K: the case's own row stiffness
+    model.__dict__["row_stiffness"] = tiled_rows(np.tile(single.row_stiffness, (cases, 1)),
+                                                 walls)
     weighted = passed * model.row_stiffness
-    if flexibility is not None:  # (Sp)ᵀW(Sp) of each case, from the case's W
-        each = per_case_rows(weighted, walls, cases)
-        flex = np.einsum("ci,ij,cj->c", each, flexibility, each)
-    else:  # Cᵀ(Sp)·K⁻¹Cᵀ(Sp): the cases do not couple, each has the case's K (one solve)
-        push = model.C_transpose_times(weighted)
-        rhs = push.reshape(cases, -1)
-        moved = (single.solve_K(rhs.T).T if single is not None
-                 else model.solve_K(rhs.ravel())).ravel()
-        flex = (push * moved).reshape(cases, -1).sum(axis=1)
+    each = per_case_rows(weighted, walls, cases)
+    flex = np.einsum("ci,ij,cj->c", each, flexibility, each)  # (Sp)ᵀW(Sp) of each case
     with np.errstate(divide="ignore", invalid="ignore"):
         mu = np.where(flex > 0.0, per_case_rows(passed * weighted, walls, cases).sum(axis=1)
                       / flex, 0.0)
-    contact = largest(np.abs(per_case_rows(weighted, walls, cases))) * mu
+    contact = largest(np.abs(each)) * mu
     reactions = model.reactions_of(u0, np.zeros(model.n_contacts)).reshape(cases, -1)
     terms = {"loads": largest(np.abs(layout.nodal_loads.reshape(cases, -1))),
              "reactions": largest(np.abs(reactions)), "contact": contact,

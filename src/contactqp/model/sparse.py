@@ -123,6 +123,15 @@ class SparseModel(ContactModel):
         return np.column_stack([self.factor.solve(rhs[:, k]) for k in range(rhs.shape[1])]
                                ) if rhs.shape[1] else np.zeros(rhs.shape)
 
+    def _solved_columns(self, C_rows: sp.csr_array):
+        """(the rows' slice, their C, K⁻¹ of their columns) a block of rows at a time, each
+        block at most SOLVE_BLOCK entries of K⁻¹C_blockᵀ (CHOLMOD's factor)."""
+        block = max(1, SOLVE_BLOCK // max(self.n_free, 1))
+        for start in range(0, C_rows.shape[0], block):
+            where = slice(start, start + block)
+            C_block = C_rows[where]
+            yield where, C_block, self.factor.solve(C_block.T.toarray())
+
     def flexibility(self, rows: np.ndarray) -> np.ndarray:
         """W = C_rows K⁻¹ C_rowsᵀ (rows x rows, dense): with CHOLMOD's factor by solves with
         the rows' columns, else SuperLU gives Pr K Prᵀ = L U with the
@@ -130,15 +139,13 @@ class SparseModel(ContactModel):
         Prᵀ U⁻¹ D U⁻ᵀ Pr and W = Zᵀ D Z with Z = U⁻ᵀ Pr Cᵀ: one sparse forward solve per row
         (:func:`forward_columns`), computed once."""
         cache, rows = self.cache, np.asarray(rows, dtype=np.intp)
-        if isinstance(self.factor, CholmodK):  # K⁻¹C_rowsᵀ by CHOLMOD, a block at once
+        if isinstance(self.factor, CholmodK):  # K⁻¹C_rowsᵀ by CHOLMOD, a block of rows at a time
             if not rows.size:
                 return np.zeros((0, 0))
             C_rows = self.C[rows]
             W = np.empty((rows.size, rows.size))
-            block = max(1, SOLVE_BLOCK // max(self.n_free, 1))  # columns solved at a time
-            for start in range(0, rows.size, block):
-                W[:, start:start + block] = C_rows @ self.factor.solve(
-                    C_rows[start:start + block].T.toarray())
+            for where, _, moved in self._solved_columns(C_rows):
+                W[:, where] = C_rows @ moved
             cache.solves += rows.size
             return 0.5 * (W + W.T)
         new = [int(i) for i in dict.fromkeys(rows.tolist()) if int(i) not in cache.where]
@@ -213,12 +220,8 @@ class SparseModel(ContactModel):
         if isinstance(self.factor, CholmodK):  # one solve per row: only the rows asked for,
             # a block of columns at a time (K⁻¹C_rowsᵀ of 10⁴ rows on 3.3·10⁵ dofs: 25 GiB)
             compliance = np.empty(rows.size)
-            block = max(1, SOLVE_BLOCK // max(self.n_free, 1))
-            for start in range(0, rows.size, block):
-                C_block = self.C[rows[start:start + block]]
-                moved = self.factor.solve(C_block.T.toarray())
-                compliance[start:start + block] = np.asarray(
-                    C_block.multiply(moved.T).sum(axis=1)).reshape(-1)
+            for where, C_block, moved in self._solved_columns(self.C[rows]):
+                compliance[where] = np.asarray(C_block.multiply(moved.T).sum(axis=1)).reshape(-1)
         elif self.factor is not None:
             compliance = np.diagonal(self.flexibility(rows)).copy()
         else:
