@@ -135,6 +135,50 @@ def test_hertz_by_both_routes_agree(monkeypatch):
     assert by_sets.info["set_factorisations"] <= by_sets.iterations
 
 
+@pytest.mark.parametrize(("released", "halves"), [
+    ([191, 103, 53], True), ([18, 10, 5], True), ([55, 28, 14], True),
+    ([71, 41, 16], False),  # the sphere's releases fall faster: 41/71 and then 16/41
+    ([22, 12], False),  # two steps do not show a halving
+    ([12, 6, 3], False),  # 3 rows: the set before's factor solves as few
+    ([40, 20, 20], False)])
+def test_releases_halve(released, halves):
+    """Releasing ahead takes three releases in a row, each within 0.1 of half the one
+    before, the last of 4 rows or more (the ratios worked out by hand)."""
+    from contactqp.methods.lagrange import halving
+
+    assert halving(released) is halves
+
+
+def test_releasing_ahead_reaches_the_same_answer_in_fewer_sets(monkeypatch):
+    """The Hertz cylinder at 6.4·10⁴ dofs pushed by 1 nm, whose releases past the contact's
+    edge halve (18, 10, 5 rows): releasing ahead ends on the rows in contact and forces of
+    the textbook loop (the halving test switched off) and of the Schur complement's route
+    (SuperLU, a different loop and solve), within their bounds, in fewer factorisations."""
+    from contactqp.fem import cylinder_on_flat
+    from contactqp.methods import lagrange
+
+    built = cylinder_on_flat(zone=0.5, fine=0.5 / 20000, growth=0.4, approach=1e-6).problem
+
+    def fresh() -> contactqp.Problem:  # a new Problem: its own model, factor and sets
+        return contactqp.Problem(built.K, built.f, built.C, built.g,
+                                 prescribed=built.prescribed,
+                                 prescribed_values=built.prescribed_values)
+
+    ahead = contactqp.solve(fresh(), "lagrange")
+    with monkeypatch.context() as patch:
+        patch.setattr(lagrange, "halving", lambda released: False)
+        textbook = contactqp.solve(fresh(), "lagrange")
+    monkeypatch.setattr(factor_module, "cholmod_installed", lambda: False)
+    by_schur = contactqp.solve(fresh(), "lagrange")
+    assert ahead.verified and textbook.verified and by_schur.verified
+    for other in (textbook, by_schur):
+        assert np.array_equal(ahead.contact_force > 0, other.contact_force > 0)
+        assert np.abs(ahead.contact_force - other.contact_force).max() <= (
+            ahead.force_error_bound + other.force_error_bound)
+    assert ahead.info["set_factorisations"] < textbook.info["set_factorisations"]
+    assert ahead.iterations < textbook.iterations
+
+
 def test_other_gaps_share_the_sets_not_their_answers():
     """A problem with other gaps (Problem.with_values) shares K's analysis and the sets'
     augmented matrices, not their answers: its forces equal those of the same problem built

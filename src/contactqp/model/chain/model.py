@@ -30,9 +30,7 @@ from contactqp.model.base import (
 from contactqp.model.chain.layout_names import (
     Layout,
     contact_forces_on_nodes,
-    element_forces,
     largest,
-    link_forces,
     penetration,
 )
 from contactqp.model.chain.numbering import layout_of
@@ -303,16 +301,12 @@ class Model(ContactModel):
 
     def reactions_of(self, u: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
         """Each support's force (+x) for displacements ``u`` of every node (statics)."""
-        links = link_forces(self.layout, element_forces(self.layout, u))
-        return support_reactions(self.layout, links, contact_force)
+        left, right = support_links(self.layout, u)
+        return support_reactions(self.layout, None, contact_force, (left, right))
 
     def support_change(self, du: np.ndarray) -> np.ndarray:
         """The supports' forces of a move ``du`` of the free nodes (statics, no load)."""
-        layout = self.layout
-        links = link_forces(layout, element_forces(layout, self.full_displacements(du)))
-        nodes = layout.support_nodes
-        right = np.where(nodes < links.size, links[np.minimum(nodes, links.size - 1)], 0.0)
-        left = np.where(nodes > 0, links[np.maximum(nodes - 1, 0)], 0.0)
+        left, right = support_links(self.layout, self.full_displacements(du))
         return left - right
 
     def seen_stiffness(self, rows: np.ndarray) -> np.ndarray:
@@ -527,16 +521,37 @@ def determinate_chain_solve(compliance: np.ndarray, support: int, rhs: np.ndarra
     return out[0] if rhs.ndim == 1 else out.T
 
 
-__all__ = ["Model", "build_model", "determinate_chain_solve", "scene_model", "support_reactions"]
+__all__ = ["Model", "build_model", "determinate_chain_solve", "scene_model", "support_links",
+           "support_reactions"]
 
 
-def support_reactions(layout: Layout, forces: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
+def support_links(layout: Layout, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(left, right): the force of the link on each side of each support for displacements
+    ``u`` of every node, k (u[j + 1] − u[j]) as :func:`element_forces` makes it, on those links
+    alone (0 between bars and past either end: :attr:`Layout.support_sides`)."""
+    sides = []
+    for link, k in layout.support_sides:
+        force = np.zeros(layout.support_nodes.size)
+        if link.size:
+            where = link >= 0
+            j = link[where]
+            force[where] = k * (u[j + 1] - u[j])
+        sides.append(force)
+    return sides[0], sides[1]
+
+
+def support_reactions(layout: Layout, forces: np.ndarray | None, contact_force: np.ndarray,
+                      sides: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """The force (+x) each support applies: what equilibrium of its node leaves over from
-    the elements on either side (``forces`` per link, 0 between bars), the loads and the
-    contacts there."""
+    the elements on either side (``forces`` per link, 0 between bars; or ``sides``, the
+    links' forces at each support, :func:`support_links`), the loads and the contacts
+    there."""
     nodes = layout.support_nodes
-    right = np.where(nodes < forces.size, forces[np.minimum(nodes, forces.size - 1)], 0.0)
-    left = np.where(nodes > 0, forces[np.maximum(nodes - 1, 0)], 0.0)
+    if sides is not None:
+        left, right = sides
+    else:
+        right = np.where(nodes < forces.size, forces[np.minimum(nodes, forces.size - 1)], 0.0)
+        left = np.where(nodes > 0, forces[np.maximum(nodes - 1, 0)], 0.0)
     outside = layout.nodal_loads[nodes]
     if layout.scene.contacts:  # a bar contact may end at a support; walls may not
         outside = outside + contact_forces_on_nodes(layout, contact_force)[nodes]

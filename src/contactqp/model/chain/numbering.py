@@ -46,7 +46,7 @@ TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_positio
             "element_stiffness", "areas", "yield_stress", "compliance", "chained_compliance",
             "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes",
             "longest_bar", "row_compliance", "row_bars", "floating_bars", "wall_nodes_by_side",
-            "held_cache", "row_compliance_roots", "softest", "outside_nodes")
+            "held_cache", "row_compliance_roots", "softest", "outside_nodes", "support_sides")
 
 
 # ... and those that depend on the gaps but not on the load values: shared when only the
@@ -263,6 +263,23 @@ class Layout(SolvingArrays):
         junction."""
         return _read_only(np.insert(self.element_stiffness,
                                     self.junctions - np.arange(self.junctions.size), 0.0))
+
+    @cached_property
+    def support_sides(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+        """Per side of the supports (left, right): (each support's link on that side, −1 where
+        none: past an end or between bars; the stiffness of the links there are), or two
+        empty arrays where no support has a link on that side."""
+        nodes, k = self.support_nodes, self.link_stiffness
+        sides = []
+        for link in (nodes - 1, nodes):
+            inside = (link >= 0) & (link < k.size)
+            inside[inside] = k[link[inside]] > 0.0
+            if not inside.any():
+                sides.append((_read_only(np.zeros(0, dtype=np.intp)), _read_only(np.zeros(0))))
+                continue
+            sides.append((_read_only(np.where(inside, link, -1)),
+                          _read_only(k[link[inside]])))
+        return tuple(sides)
 
     @cached_property
     def node_x(self) -> np.ndarray:
