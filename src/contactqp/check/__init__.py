@@ -68,19 +68,17 @@ def check_model(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, contac
                   for name, value in found.items() if name != "natural_map")
     force = displacement = np.inf
     why = ""
-    if chain is not None:
+    # a bar that only contact holds: its rows see no stiffness with the supports held, and
+    # the chain's certificate does not bound a force left on an open one (random scene
+    # 223347597, floating=0.6: HiGHS put 13.3 N on a wall 8.4e-8 m open, and the chain's
+    # bound said 0.17 N); there the general certificate's bound decides an answer that passes
+    if chain is not None and not (passing and model.singular):
         force, displacement = chain(pen)
         within = (force <= tolerances.force * model.force_scale
                   and displacement <= tolerances.displacement * model.displacement_scale)
-        # a bar that only contact holds: its rows see no stiffness with the supports held,
-        # and the chain's certificate does not bound a force left on an open one (random
-        # scene 223347597, floating=0.6: HiGHS put 13.3 N on a wall 8.4e-8 m open, and the
-        # chain's bound said 0.17 N); the general certificate's bound is the one kept
-        if (within and not model.singular) or not passing:
+        if within or not passing:  # the general certificate cannot change this verdict
             return verdict(model, found, lam, equality, force, displacement, tolerances,
                            penetration=pen)
-        if model.singular:
-            force = displacement = np.inf
     general = on_set_bounds(model, u_free, lam, pen, equality)
     if chain is not None and not np.isfinite(general[0]):
         # the chain's own set solve found no reference; the scene's problem (the same free

@@ -248,11 +248,10 @@ def first_guess(model) -> np.ndarray:
     return after if after.any() else passed > 0.0
 
 
-def released_ahead(active: np.ndarray, following: np.ndarray, lam: np.ndarray,
+def released_ahead(following: np.ndarray, count: int, lam: np.ndarray,
                    equality: np.ndarray) -> np.ndarray:
-    """``following`` with as many more rows released as the step released: the held rows
-    of least force (:func:`solve_augmented` asks where the steps' releases halve)."""
-    count = int(np.count_nonzero(active & ~following))
+    """``following`` with ``count`` more rows released (as many as the step released): the
+    held rows of least force (:func:`solve_augmented` asks where the steps' releases halve)."""
     held = np.flatnonzero(following & ~equality)
     if held.size <= count:
         return following
@@ -334,7 +333,7 @@ def solve_augmented(model, contact: str, *, max_iterations: int | None = None) -
                 released = [*released, count] if count and not entered else []
                 decided = following
                 if halving(released):
-                    following = released_ahead(active, decided, lam, equality)
+                    following = released_ahead(decided, count, lam, equality)
                     released = []
                 ahead = following ^ decided
         if np.array_equal(following, active):

@@ -301,8 +301,7 @@ class Model(ContactModel):
 
     def reactions_of(self, u: np.ndarray, contact_force: np.ndarray) -> np.ndarray:
         """Each support's force (+x) for displacements ``u`` of every node (statics)."""
-        left, right = support_links(self.layout, u)
-        return support_reactions(self.layout, None, contact_force, (left, right))
+        return support_balance(self.layout, *support_links(self.layout, u), contact_force)
 
     def support_change(self, du: np.ndarray) -> np.ndarray:
         """The supports' forces of a move ``du`` of the free nodes (statics, no load)."""
@@ -521,8 +520,8 @@ def determinate_chain_solve(compliance: np.ndarray, support: int, rhs: np.ndarra
     return out[0] if rhs.ndim == 1 else out.T
 
 
-__all__ = ["Model", "build_model", "determinate_chain_solve", "scene_model", "support_links",
-           "support_reactions"]
+__all__ = ["Model", "build_model", "determinate_chain_solve", "scene_model", "support_balance",
+           "support_links", "support_reactions"]
 
 
 def support_links(layout: Layout, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -531,28 +530,30 @@ def support_links(layout: Layout, u: np.ndarray) -> tuple[np.ndarray, np.ndarray
     alone (0 between bars and past either end: :attr:`Layout.support_sides`)."""
     sides = []
     for link, k in layout.support_sides:
-        force = np.zeros(layout.support_nodes.size)
-        if link.size:
-            where = link >= 0
-            j = link[where]
-            force[where] = k * (u[j + 1] - u[j])
+        force = np.zeros(link.size)
+        where = link >= 0
+        j = link[where]
+        force[where] = k * (u[j + 1] - u[j])
         sides.append(force)
     return sides[0], sides[1]
 
 
-def support_reactions(layout: Layout, forces: np.ndarray | None, contact_force: np.ndarray,
-                      sides: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+def support_reactions(layout: Layout, forces: np.ndarray, contact_force: np.ndarray
+                      ) -> np.ndarray:
     """The force (+x) each support applies: what equilibrium of its node leaves over from
-    the elements on either side (``forces`` per link, 0 between bars; or ``sides``, the
-    links' forces at each support, :func:`support_links`), the loads and the contacts
-    there."""
+    the elements on either side (``forces`` per link, 0 between bars), the loads and the
+    contacts there."""
     nodes = layout.support_nodes
-    if sides is not None:
-        left, right = sides
-    else:
-        right = np.where(nodes < forces.size, forces[np.minimum(nodes, forces.size - 1)], 0.0)
-        left = np.where(nodes > 0, forces[np.maximum(nodes - 1, 0)], 0.0)
-    outside = layout.nodal_loads[nodes]
+    right = np.where(nodes < forces.size, forces[np.minimum(nodes, forces.size - 1)], 0.0)
+    left = np.where(nodes > 0, forces[np.maximum(nodes - 1, 0)], 0.0)
+    return support_balance(layout, left, right, contact_force)
+
+
+def support_balance(layout: Layout, left: np.ndarray, right: np.ndarray,
+                    contact_force: np.ndarray) -> np.ndarray:
+    """Each support's force from the forces of the links on its ``left`` and ``right``
+    (:func:`support_links`), less the loads and the contacts at its node."""
+    outside = layout.nodal_loads[layout.support_nodes]
     if layout.scene.contacts:  # a bar contact may end at a support; walls may not
-        outside = outside + contact_forces_on_nodes(layout, contact_force)[nodes]
+        outside = outside + contact_forces_on_nodes(layout, contact_force)[layout.support_nodes]
     return left - right - outside

@@ -267,18 +267,13 @@ class Layout(SolvingArrays):
     @cached_property
     def support_sides(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         """Per side of the supports (left, right): (each support's link on that side, −1 where
-        none: past an end or between bars; the stiffness of the links there are), or two
-        empty arrays where no support has a link on that side."""
+        none: past an end or between bars; the stiffness of the links there are)."""
         nodes, k = self.support_nodes, self.link_stiffness
         sides = []
         for link in (nodes - 1, nodes):
             inside = (link >= 0) & (link < k.size)
             inside[inside] = k[link[inside]] > 0.0
-            if not inside.any():
-                sides.append((_read_only(np.zeros(0, dtype=np.intp)), _read_only(np.zeros(0))))
-                continue
-            sides.append((_read_only(np.where(inside, link, -1)),
-                          _read_only(k[link[inside]])))
+            sides.append((_read_only(np.where(inside, link, -1)), _read_only(k[link[inside]])))
         return tuple(sides)
 
     @cached_property
