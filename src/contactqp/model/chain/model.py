@@ -236,7 +236,8 @@ class Model(ContactModel):
             # free nodes apart (supports inside the chain: a batch's cases), one block: the
             # same subtraction N_(j−1) − N_j, read at the free nodes (the links 0 past the ends)
             ends = np.concatenate(([0.0], links, [0.0]))
-            r = ends[self.free] - ends[self.free + 1] - P
+            r = np.subtract(ends[:-1], ends[1:]).take(self.free)  # one gather, no free + 1
+            r -= P
             r[columns] += push
             return float(np.abs(r, out=r).max(initial=0.0))
         edges = np.searchsorted(columns, np.arange(0, n + IMBALANCE_BLOCK, IMBALANCE_BLOCK))
