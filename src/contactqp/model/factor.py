@@ -58,6 +58,20 @@ def cholmod_installed() -> bool:
     return True
 
 
+def lower_triangle(matrix: sp.spmatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(rows, columns, values) of the entries on and below the diagonal of a square sparse
+    matrix, in CSC order (column by column, rows increasing; duplicates summed), read off its
+    CSC arrays (sp.tril goes through COO and back: 3 of the 8 ms of a 2D model's analysis at
+    8.7·10³ dofs)."""
+    csc = sp.csc_matrix(matrix)  # a copy where the format changes; never the caller's
+    if not csc.has_canonical_format:
+        csc = csc.copy()
+        csc.sum_duplicates()  # sorts the indices too
+    columns = np.repeat(np.arange(csc.shape[1]), np.diff(csc.indptr))
+    keep = csc.indices >= columns
+    return csc.indices[keep].astype(np.int64), columns[keep], csc.data[keep]
+
+
 @dataclass(eq=False)
 class Cholmod:
     """One symbolic analysis of a fixed pattern (lower triangle, CSC order: ``rows``,
@@ -77,12 +91,10 @@ class Cholmod:
         kept), CHOLMOD's own ordering (AMD)."""
         from cvxopt import cholmod, spmatrix
 
-        lower = sp.csc_matrix(sp.tril(pattern))
-        lower.sort_indices()
-        n = lower.shape[0]
-        columns = np.repeat(np.arange(n), np.diff(lower.indptr))
-        matrix = spmatrix(np.ones(lower.nnz), lower.indices, columns, (n, n))
-        return cls(n, lower.indices.copy(), columns, cholmod.symbolic(matrix), matrix)
+        rows, columns, _ = lower_triangle(pattern)
+        n = pattern.shape[0]
+        matrix = spmatrix(np.ones(rows.size), rows, columns, (n, n))
+        return cls(n, rows, columns, cholmod.symbolic(matrix), matrix)
 
     def position(self, rows: np.ndarray, columns: np.ndarray) -> np.ndarray:
         """Where (row, column) entries of the lower triangle sit in the pattern's values."""
@@ -148,9 +160,9 @@ def cholmod_of(K: sp.csc_matrix, C: sp.csr_array) -> CholmodK | None:
     if gram.nnz > FILL * max(K.nnz, 1):
         return None
     engine = Cholmod.of_pattern(sp.csc_matrix(abs(K) + gram))
-    lower = sp.coo_matrix(sp.tril(K))
-    values = np.zeros(engine.rows.size)
-    np.add.at(values, engine.position(lower.row, lower.col), lower.data)
+    rows, columns, data = lower_triangle(K)
+    values = np.bincount(engine.position(rows, columns), weights=data,
+                         minlength=engine.rows.size).astype(float, copy=False)  # K empty: int
     try:
         engine.factor("K", values)
     except ArithmeticError:
@@ -253,4 +265,4 @@ def diagonal_pivots(U: sp.csc_matrix) -> np.ndarray:
 
 __all__ = ["ORDERING", "Cholmod", "CholmodK", "ColumnCache", "cholmod_installed",
            "cholmod_of", "diagonal_pivots", "elimination_tree", "factorise",
-           "forward_columns", "reach"]
+           "forward_columns", "lower_triangle", "reach"]
