@@ -1,0 +1,105 @@
+"""The Hertz sphere at 10⁶ dofs: what a direct factorisation and an iterative solve of K cost
+on this machine (issue 39's 3D goal; the measurements on docs/benchmarks.md, "3D at 10⁶ dofs").
+
+    python benchmarks/route3d.py [--level 6.5] [--cholmod]
+
+Builds the sphere of benchmarks/hertz3d.py's level k (``sphere_on_flat``, δ = 10 µm; level
+6.5 has 1.1·10⁶ dofs, and building it takes about 4 minutes and 14 GB), then times on K on the
+free dofs:
+
+- pyamg's smoothed aggregation with the six rigid-body modes as its near null space (set-up),
+  and conjugate gradients with it on K u = f (the loads of the prescribed approach) to a
+  relative residual of 1e-10: iterations and time. pyamg is not a dependency of contactqp:
+  without it, this part says so;
+- with --cholmod, CHOLMOD through cvxopt: the symbolic analysis, the numeric factorisation and
+  one solve. At level 6.5 the factorisation did not fit in 24 GB beside the model.
+
+Prints one line per step as it is measured, and the peak memory of the process.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import time
+
+import numpy as np
+import scipy.sparse as sp
+
+from contactqp.fem import sphere_on_flat
+from hertz3d import APPROACH, ZONE, level_sizes
+
+
+def peak_gb() -> float:
+    """The process's peak resident memory (GB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
+
+
+def rigid_body_modes(points: np.ndarray, dofs: int) -> np.ndarray:
+    """The three translations and three rotations of the nodes ``points`` (3 x nodes), as
+    columns over the dofs numbered node by node (x, y, z of node 0, then node 1, ...)."""
+    node, component = np.arange(dofs) // 3, np.arange(dofs) % 3
+    x, y, z = points[0][node], points[1][node], points[2][node]
+    modes = np.zeros((dofs, 6))
+    for c in range(3):
+        modes[component == c, c] = 1.0
+    along = [component == c for c in range(3)]
+    modes[along[0], 3], modes[along[1], 3] = -y[along[0]], x[along[1]]  # about z
+    modes[along[1], 4], modes[along[2], 4] = -z[along[1]], y[along[2]]  # about x
+    modes[along[2], 5], modes[along[0], 5] = -x[along[2]], z[along[0]]  # about y
+    return modes
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--level", type=float, default=6.5, help="the sphere's level")
+    parser.add_argument("--cholmod", action="store_true", help="also factor K by CHOLMOD")
+    args = parser.parse_args()
+    fine, growth = level_sizes(args.level)
+    start = time.perf_counter()
+    model = sphere_on_flat(zone=ZONE, fine=fine, growth=growth, approach=APPROACH)
+    problem = model.problem
+    print(f"level {args.level:g}: {problem.n} dofs, {problem.m} rows; built in "
+          f"{time.perf_counter() - start:.1f} s, peak {peak_gb():.1f} GB", flush=True)
+    free = np.setdiff1d(np.arange(problem.n), problem.prescribed)
+    whole = sp.csr_array(problem.K)
+    K = sp.csr_matrix(whole[free][:, free])
+    f = problem.f[free] - whole[free][:, problem.prescribed] @ problem.prescribed_values
+    print(f"K on the free dofs: {K.shape[0]} x {K.shape[0]}, {K.nnz} entries", flush=True)
+    try:
+        import pyamg
+    except ImportError:
+        print("pyamg is not installed (pip install pyamg): no iterative solve")
+    else:
+        start = time.perf_counter()
+        hierarchy = pyamg.smoothed_aggregation_solver(
+            K, B=rigid_body_modes(model.mesh.p, problem.n)[free], max_coarse=500)
+        print(f"pyamg {pyamg.__version__} set-up: {time.perf_counter() - start:.1f} s, "
+              f"{len(hierarchy.levels)} levels, peak {peak_gb():.1f} GB", flush=True)
+        residuals: list[float] = []
+        start = time.perf_counter()
+        u = hierarchy.solve(f, tol=1e-10, accel="cg", maxiter=500, residuals=residuals)
+        seconds = time.perf_counter() - start
+        relative = np.linalg.norm(f - K @ u) / np.linalg.norm(f)
+        print(f"conjugate gradients: {len(residuals) - 1} iterations, {seconds:.1f} s, "
+              f"relative residual {relative:.1e}", flush=True)
+    if args.cholmod:
+        from cvxopt import cholmod, matrix, spmatrix
+
+        lower = sp.tril(K, format="coo")
+        held = spmatrix(lower.data, lower.row, lower.col, K.shape)
+        start = time.perf_counter()
+        factor = cholmod.symbolic(held)
+        print(f"CHOLMOD symbolic: {time.perf_counter() - start:.1f} s", flush=True)
+        start = time.perf_counter()
+        cholmod.numeric(held, factor)
+        print(f"CHOLMOD numeric: {time.perf_counter() - start:.1f} s, peak {peak_gb():.1f} GB",
+              flush=True)
+        rhs = matrix(f)
+        start = time.perf_counter()
+        cholmod.solve(factor, rhs)
+        print(f"CHOLMOD solve: {time.perf_counter() - start:.1f} s", flush=True)
+
+
+if __name__ == "__main__":
+    main()
