@@ -231,6 +231,10 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
                   solved.iterations, prepared.method, alone, failures)
     for case, result in alone.items():
         _take(batch, case, result)
+    # the batch's scene keeps its layout, which reads the scene back: a cycle that only the
+    # garbage collector frees. Broken here (nothing outlives the call), the layout's arrays of
+    # every case are freed on return, and the next batch reuses their memory
+    batch_scene.__dict__.pop("layout", None)
     object.__setattr__(batch, "time", time.perf_counter() - start)
     if progress is not None:
         progress(cases, cases)
