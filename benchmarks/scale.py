@@ -41,7 +41,9 @@ again from the data. ``--quick``: the smallest cases, under two minutes.
 from __future__ import annotations
 
 import argparse
+import copy
 import json
+import math
 import statistics
 import time
 import warnings
@@ -59,6 +61,7 @@ from cases import in_child, machine
 TIMEOUT = {False: 60.0, True: 10.0}  # s per run (full, --quick)
 BUDGET = {False: 2400.0, True: 75.0}  # s: no run starts after this much of the whole run
 FLOOR_TIMES = 10.0  # ... or this many times the case's floor, where that is longer
+REPEATS, REPEAT_UNDER = 3, 2.0  # a run under REPEAT_UNDER s is timed as the median of REPEATS
 CHECK_ALLOWANCE = 60.0  # s more for a peer's run: the check of its answer, outside its time
 ZONE, APPROACH = 0.5, 0.01  # mm: the contact zone's (half-)width, δ
 METHODS = ("lagrange", "semismooth_newton", "pgs", "penalty", "augmented", "qp")
@@ -242,12 +245,27 @@ def method(problem: contactqp.Problem, name: str) -> dict[str, Any]:
 
 
 def run(problem: contactqp.Problem, label: str) -> dict[str, Any]:
+    """One run, timed as the floor is: where the first takes under REPEAT_UNDER s, the median
+    of REPEATS runs (each on a copy of the problem as it came, with nothing of the runs
+    before it kept: no model, no factorisation), so that a short run is not judged by its
+    first pass through cold caches and fresh pages against a floor that is a median too.
+    ``first_seconds``: the first run's time."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the solvers' own warnings: the check decides
         try:
-            return peer(problem, label) if label in PEERS else method(problem, label)
+            found = once(copy.copy(problem), label)
+            if found.get("seconds", math.inf) < REPEAT_UNDER:
+                times = [found["seconds"]] + [once(copy.copy(problem), label)["seconds"]
+                                              for _ in range(REPEATS - 1)]
+                found = {**found, "first_seconds": times[0],
+                         "seconds": statistics.median(times)}
+            return found
         except Exception as error:  # noqa: BLE001 (a crash is a result here, with its reason)
             return {"refused": f"raised {type(error).__name__}: {error}"[:200]}
+
+
+def once(problem: contactqp.Problem, label: str) -> dict[str, Any]:
+    return peer(problem, label) if label in PEERS else method(problem, label)
 
 
 def isolated(timeout: float, problem: contactqp.Problem, label: str) -> dict[str, Any]:
