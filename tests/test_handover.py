@@ -9,7 +9,9 @@ from contactqp.model.chain.to_problem import problem_from_scene
 from contactqp.random_scenes import random_scene
 
 
-@pytest.mark.parametrize("seed", range(25))
+# fresh seeds that failed once: 91043 and 91049, a held row of stiffness 1e10 beside dofs of
+# 1e5, whose force the augmented set solve left in its residual (6.6e-8 and 1.0e-9 of F)
+@pytest.mark.parametrize("seed", [*range(25), 91043, 91049])
 def test_a_scene_and_its_problem_give_the_same_answer(seed):
     scene = random_scene(np.random.default_rng(seed), contrast=False)
     problem = problem_from_scene(scene)
