@@ -112,7 +112,8 @@ class AugmentedSet:
     steps: int = 0  # Uzawa steps taken, over every solve with this set
     answer: tuple | None = field(default=None, repr=False)  # (P, g_A, u, λ_A) on P, g
     update: Update | None = None
-    gram: Any = field(default=None, repr=False)  # C_A C_Aᵀ's factor (:meth:`held_share`)
+    gram: Any = field(default=None, repr=False)  # C_A C_Aᵀ's factor and scale, as
+    # contactqp.model.saddle.gram_factor made it to find the rows independent (:meth:`held_share`)
 
     def operator(self, model: SparseModel):
         """(M_A⁻¹ as a function, the key of the factor it reads): the held factor of M_A, or
@@ -180,11 +181,8 @@ class AugmentedSet:
         force left on that dof stays in r whatever the steps: random scene 91043 as a
         problem stopped with 6.3e-9 of F there, its gap closed to 1e-25. Moved into λ, the
         residual is left only where u must change."""
-        import scipy.sparse.linalg as spla
-
-        if self.gram is None:
-            self.gram = spla.splu(sp.csc_matrix(C_A @ C_A.T))
-        return self.gram.solve(C_A @ residual)
+        factor, scale = self.gram
+        return scale * factor.solve(scale * (C_A @ residual))
 
 
 def augmented_values(model: SparseModel, weight: np.ndarray) -> np.ndarray:
@@ -235,16 +233,17 @@ def augmented_set(model: SparseModel, rows: np.ndarray) -> AugmentedSet | None:
     found = sets.get(key)
     if found is not None:
         return found
-    from contactqp.model.saddle import rows_dependent
+    from contactqp.model.saddle import gram_factor
 
     C_A = model.C[rows]
-    if rows_dependent(C_A):
+    gram = gram_factor(C_A)
+    if gram is None:  # rows that repeat a constraint
         return None
     rho = STIFFER * model.row_stiffness[rows]
     weight = np.zeros(model.n_contacts)
     weight[rows] = rho
     found = AugmentedSet(rows.copy(), rho, augmented_values(model, weight), key,
-                         update=_update(model, rows))
+                         update=_update(model, rows), gram=gram)
     while len(sets) >= KEPT:
         sets.pop(next(iter(sets)))
     sets[key] = found

@@ -13,6 +13,8 @@ said to be redundant (the check then compares Cᵀλ).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -74,6 +76,12 @@ def rows_dependent(C_A: sp.csr_array) -> bool:
     DEPENDENT (sparse LU; on a chain C_A C_Aᵀ is banded). A banded LU of the saddle-point
     system need not say so: round-off leaves its pivot 1e-16 instead of 0, and the answer
     carries forces of 1e5 that cancel (measured: walls on both sides of a node)."""
+    return gram_factor(C_A) is None
+
+
+def gram_factor(C_A: sp.csr_array) -> tuple[Any, np.ndarray] | None:
+    """(the sparse LU of C_A C_Aᵀ scaled to a unit diagonal, that scale s): (C_A C_Aᵀ)⁻¹b =
+    s · LU⁻¹(s · b); None where the rows are dependent (:func:`rows_dependent`)."""
     gram = sp.csc_matrix(C_A @ C_A.T)
     scale = 1.0 / np.sqrt(gram.diagonal())
     gram = sp.csc_matrix(sp.diags_array(scale) @ gram @ sp.diags_array(scale))
@@ -82,8 +90,10 @@ def rows_dependent(C_A: sp.csr_array) -> bool:
     try:
         factor = spla.splu(gram, diag_pivot_thresh=1.0)
     except RuntimeError:  # "Factor is exactly singular"
-        return True
-    return bool(np.abs(factor.U.diagonal()).min(initial=1.0) < DEPENDENT)
+        return None
+    if np.abs(factor.U.diagonal()).min(initial=1.0) < DEPENDENT:
+        return None
+    return factor, scale
 
 
 def set_solve(K: sp.sparray, C_A: sp.csr_array, force: np.ndarray, gap: np.ndarray
@@ -112,5 +122,5 @@ def set_solve(K: sp.sparray, C_A: sp.csr_array, force: np.ndarray, gap: np.ndarr
     return x[:n], x[n:] * scale, True
 
 
-__all__ = ["DEPENDENT", "REDUNDANT_SHIFT", "banded_order", "row_scale", "rows_dependent",
-           "saddle_point_system", "set_solve", "solve_saddle_point"]
+__all__ = ["DEPENDENT", "REDUNDANT_SHIFT", "banded_order", "gram_factor", "row_scale",
+           "rows_dependent", "saddle_point_system", "set_solve", "solve_saddle_point"]
