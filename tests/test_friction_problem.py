@@ -15,6 +15,7 @@ of test_friction.exact_tresca) or another method; none is a printout of the code
 from __future__ import annotations
 
 import math
+import warnings
 from fractions import Fraction
 
 import numpy as np
@@ -455,11 +456,14 @@ def test_no_backend_prints_anything_with_friction(capfd):
     """HiGHS wrote its banner to the terminal from C on every Tresca solve through
     qpsolvers; the library prints nothing unless asked."""
     problem = integer(17)
-    for solver in qpsolvers.available_solvers:
-        contactqp.solve(problem, "qp", backend="qpsolvers", solver=solver)
-    contactqp.solve(problem, "qp", backend="cvxpy")
+    with warnings.catch_warnings(record=True) as caught:  # nor warns (OSQP's raise_error)
+        warnings.simplefilter("always")
+        for solver in qpsolvers.available_solvers:
+            contactqp.solve(problem, "qp", backend="qpsolvers", solver=solver)
+        contactqp.solve(problem, "qp", backend="cvxpy")
     out, err = capfd.readouterr()
     assert out == "" and err == ""
+    assert [str(w.message) for w in caught] == []
 
 
 def enumerated_tresca(K, f, C, g, T, s):
