@@ -138,6 +138,29 @@ def test_energy_of_a_push_from_the_greens_function_is_the_dense_one(pushed):
     assert model.energy_of(push) == pytest.approx(expected, rel=1e-12)
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_reactions_with_no_contact_are_each_bars_loads_when_one_support_holds_it(seed):
+    """The force scale's ‖R₀‖∞ on a chain whose every bar has one support (read as each bar's
+    net load) against the supports' reactions worked out by statics from u₀ = K⁻¹P, and
+    against the loads summed by hand; two bars, inner supports, random loads and walls."""
+    rng = np.random.default_rng(seed)
+    bars = tuple(contactqp.Bar.from_areas(rng.uniform(1e-4, 1e-3, 12), 2e11, length=1.0)
+                 for _ in range(2))
+    loads = tuple(contactqp.Load(int(rng.integers(13)), float(rng.normal(0.0, 1e5)), bar=b)
+                  for b in (0, 0, 1))
+    walls = (contactqp.Wall(12, 1e-6, "+", bar=0), contactqp.Wall(0, 1e-6, "-", bar=1))
+    scene = contactqp.Scene(bars, (contactqp.Support(int(rng.integers(1, 12)), bar=0),
+                                   contactqp.Support(int(rng.integers(1, 12)), bar=1)),
+                            loads, walls)
+    model = build_model(scene)
+    assert model.determinate is not None
+    u0 = model.full_displacements(model.free_displacement)
+    statics = np.abs(model.reactions_of(u0, np.zeros(model.n_contacts))).max()
+    by_hand = max(abs(sum(p.force for p in loads if p.bar == b)) for b in (0, 1))
+    assert model.scale_terms().reactions == pytest.approx(statics, rel=1e-9, abs=1e-9)
+    assert model.scale_terms().reactions == pytest.approx(by_hand, rel=1e-12)
+
+
 def test_a_million_element_bar_is_exact_to_round_off():
     """Exact areas: the discrete tip flexibility is the cone's ∫dx/(EA), so the condensed
     contact force equals the continuum closed form up to round-off. Assembling K and

@@ -195,7 +195,10 @@ def verdict(model: ContactModel, found: dict[str, float | None], lam: np.ndarray
     # a row that is unilateral by its kind may only push, even where the contact asked for
     # holds it on its gap (the textbook equality form): a pull there is not physical
     unilateral = ~model.equality
-    pulling = float(np.maximum(-lam[unilateral], 0.0).max(initial=0.0)) / F
+    if equality.any() or found.get("sign") is None:
+        pulling = float(np.maximum(-lam[unilateral], 0.0).max(initial=0.0)) / F
+    else:  # every row unilateral: the sign residual is that pull (:func:`residuals`)
+        pulling = found["sign"]
     physical = pulling <= tolerances.sign
     notes = list(failures)
     if not physical:

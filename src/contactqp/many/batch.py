@@ -38,7 +38,6 @@ from contactqp.methods import load_cases as many
 from contactqp.methods.base import Solution
 from contactqp.model import (
     Model,
-    penetration,
 )
 from contactqp.model.base import ScaleTerms, displacement_scale, force_scale
 from contactqp.model.chain import layout_of
@@ -83,22 +82,22 @@ def tiled_rows(values: np.ndarray, walls: int) -> np.ndarray:
 
 
 def case_scales(model: Model, cases: int, free_displacement: np.ndarray, gaps: np.ndarray,
-                single: Model, flexibility: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(F, U) of every case of a tiled model, by the one rule of
+                flexibility: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(F, U) of every case of a tiled model (:meth:`Prepared.tiled`: every case's rows
+    with the case's own row stiffness), by the one rule of
     :mod:`contactqp.model.base` (``free_displacement`` per case: cases x free nodes; ``gaps``
     cases x rows), each term reduced over the case's own entries; and the tiled model's own F
     and U set by the same rule from the largest of every case's terms (the rule takes maxima:
     they are the tiled model's own, bit for bit, but for λ₀, whose step is per case). A batch
-    holds no bar without a support (:func:`contactqp.methods.load_cases.fits`). ``single``:
-    the model of one case, and ``flexibility`` its W = C K⁻¹ Cᵀ (the prepared model's), which
-    gives each case's (Sp)ᵀW(Sp) without a solve."""
+    holds no bar without a support (:func:`contactqp.methods.load_cases.fits`).
+    ``flexibility``: W = C K⁻¹ Cᵀ of one case (the prepared model's), which gives each case's
+    (Sp)ᵀW(Sp) without a solve."""
     layout, walls = model.layout, len(model.scene.walls) // cases
     largest = partial(many.row_reduce, np.maximum, initial=0.0)  # each case's largest
-    u0 = model.full_displacements(free_displacement.ravel())
-    passed = np.maximum(penetration(layout, u0), 0.0)
-    # every case's rows see its K: the case's own row stiffness
-    model.__dict__["row_stiffness"] = tiled_rows(np.tile(single.row_stiffness, (cases, 1)),
-                                                 walls)
+    # C u₀ − g, bit for bit the penetration of u₀ at every node (a support's 0 adds nothing)
+    passed = model.C_times(free_displacement.ravel())
+    passed -= model.g
+    np.maximum(passed, 0.0, out=passed)
     weighted = passed * model.row_stiffness
     each = per_case_rows(weighted, walls, cases)
     flex = np.einsum("ci,ij,cj->c", each, flexibility, each)  # (Sp)ᵀW(Sp) of each case
@@ -106,19 +105,22 @@ def case_scales(model: Model, cases: int, free_displacement: np.ndarray, gaps: n
         mu = np.where(flex > 0.0, per_case_rows(passed * weighted, walls, cases).sum(axis=1)
                       / flex, 0.0)
     contact = largest(np.abs(each)) * mu
-    reactions = model.reactions_of(u0, np.zeros(model.n_contacts)).reshape(cases, -1)
+    reactions = (layout.bar_loads if model.determinate is not None  # a bar's one support
+                 else model.reactions_of(model.full_displacements(free_displacement.ravel()),
+                                         np.zeros(model.n_contacts))).reshape(cases, -1)
     terms = {"loads": largest(np.abs(layout.nodal_loads.reshape(cases, -1))),
              "reactions": largest(np.abs(reactions)), "contact": contact,
-             "unbalanced": np.zeros(cases), "free": largest(np.abs(u0.reshape(cases, -1))),
+             "unbalanced": np.zeros(cases), "free": largest(np.abs(free_displacement)),
              "passed": largest(per_case_rows(passed, walls, cases)),
              "widest": largest(gaps), "size": float(layout.longest_bar),
              "softest": float(model.band[0].min(initial=np.inf)) if model.band.size else 0.0}
-    # the rule on every case at once (its terms as arrays, one entry per case)
-    per_case = ScaleTerms(**{k: np.broadcast_to(np.asarray(v, dtype=float), (cases,))
-                             for k, v in terms.items()})
-    U = np.asarray(displacement_scale(per_case), dtype=float).reshape(cases)
-    F = np.asarray(force_scale(per_case, U), dtype=float).reshape(cases)
-    whole = ScaleTerms(**{k: float(np.max(v)) for k, v in terms.items()})
+    # the rule on every case at once (its terms numbers or arrays, one entry per case)
+    per_case = ScaleTerms(**terms)
+    U = np.array(np.broadcast_to(displacement_scale(per_case), (cases,)), dtype=float)
+    F = np.array(np.broadcast_to(force_scale(per_case, U), (cases,)), dtype=float)
+    arrays = [k for k, v in terms.items() if not isinstance(v, float)]
+    tops = np.maximum.reduce([terms[k] for k in arrays], axis=1)  # NaN where a case's is
+    whole = ScaleTerms(**{**terms, **dict(zip(arrays, tops.tolist()))})
     model.__dict__["_terms"] = whole
     model.__dict__["displacement_scale"] = U_all = float(displacement_scale(whole))
     model.__dict__["force_scale"] = float(force_scale(whole, U_all))
@@ -213,7 +215,7 @@ def solve_batch(prepared: Prepared, loads: np.ndarray | None, gaps: np.ndarray |
                         "solved with the batch")
     # the tiled answer checked as one scene, without a natural map over every case's rows
     # (each case's is read from its rows) and without the stresses a Batch does not hold
-    F, U = case_scales(model, cases, solved.free_displacement, gap_cases, prepared.model,
+    F, U = case_scales(model, cases, solved.free_displacement, gap_cases,
                        prepared.flexibility[1])
     together = checked(model, solution, prepared.contact, natural=False)
     lam = solved.contact_force

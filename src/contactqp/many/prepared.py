@@ -23,7 +23,7 @@ import numpy as np
 from contactqp._validate import value_array
 from contactqp.errors import OptionError, SceneError
 from contactqp.feasibility import equality_conflict
-from contactqp.many.batch import Batch, solve_batch, tiled_scene
+from contactqp.many.batch import Batch, solve_batch, tiled_rows, tiled_scene
 from contactqp.methods import Method, checked_options, complementarity, load_cases
 from contactqp.model import Model, build_model, scene_model
 from contactqp.model.chain import layout_of
@@ -226,6 +226,11 @@ class Prepared:
         kept = self._kept
         if kept.get("cases") != cases:
             model = build_model(tiled_scene(self.scene, cases))
+            # every case's rows see its K: the case's own row stiffness, bit for bit
+            stiffness = tiled_rows(np.tile(self.model.row_stiffness, (cases, 1)),
+                                   len(self.scene.walls))
+            stiffness.flags.writeable = False
+            model.__dict__["row_stiffness"] = stiffness
             for name in TOPOLOGY:  # made here once, shared by every batch's layout
                 getattr(model.layout, name)
             kept.update(cases=cases, tiled=model)

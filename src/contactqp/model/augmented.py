@@ -114,6 +114,14 @@ class AugmentedSet:
     update: Update | None = None
     gram: Any = field(default=None, repr=False)  # C_A C_Aᵀ's factor and scale, as
     # contactqp.model.saddle.gram_factor made it to find the rows independent (:meth:`held_share`)
+    held_rows: Any = field(default=None, repr=False)  # (C, C_A, C_Aᵀ): the rows of the C given
+
+    def rows_of(self, C: sp.csr_array) -> tuple[sp.csr_array, Any]:
+        """(C_A, C_Aᵀ) of ``C`` (every model that shares this set shares its C), made once."""
+        if self.held_rows is None or self.held_rows[0] is not C:
+            C_A = C[self.rows]
+            self.held_rows = (C, C_A, C_A.T)
+        return self.held_rows[1], self.held_rows[2]
 
     def operator(self, model: SparseModel):
         """(M_A⁻¹ as a function, the key of the factor it reads): the held factor of M_A, or
@@ -151,16 +159,16 @@ class AugmentedSet:
         F, U = model.force_scale, model.displacement_scale  # K's solves first
         engine = model.factor.engine
         inverse, held = self.operator(model)
-        C_A = model.C[self.rows]
+        C_A, C_A_T = self.rows_of(model.C)
         u, lam = ((np.zeros(model.n_free), np.zeros(self.rows.size)) if start is None
                   else (start[0].copy(), start[1].copy()))
         last = np.inf
         for step in range(steps):
-            r = force - model.K @ u - C_A.T @ lam
+            r = force - model.K @ u - C_A_T @ lam
             s = gap - C_A @ u
             if engine.holds != held:  # nothing between the steps solves with K
                 raise SolverError("the augmented factor was replaced during its solve")
-            du = inverse(r + C_A.T @ (self.rho * s))
+            du = inverse(r + C_A_T @ (self.rho * s))
             u = u + du
             dlam = self.rho * (C_A @ u - gap)
             lam = lam + dlam
@@ -171,7 +179,7 @@ class AugmentedSet:
                 break
             last = size
         if steps > 1:  # an exact solve: the force left where the rows hold goes to their λ
-            lam = lam + self.held_share(C_A, force - model.K @ u - C_A.T @ lam)
+            lam = lam + self.held_share(C_A, force - model.K @ u - C_A_T @ lam)
         return u, lam
 
     def held_share(self, C_A: sp.csr_array, residual: np.ndarray) -> np.ndarray:

@@ -104,13 +104,13 @@ def displacement_scale(terms: ScaleTerms) -> Any:
         fallback = (terms.widest if terms.widest > 0.0 else
                     terms.size if terms.size > 0.0 else 1.0)
         return float(scale if scale > noise else fallback)
-    force = np.maximum.reduce([terms.loads, terms.reactions, terms.contact, terms.unbalanced])
+    force = _largest_force(terms)
     with np.errstate(divide="ignore", invalid="ignore"):
-        noise = np.where(np.greater(terms.softest, 0.0),
-                         ROUND_OFF_LENGTH * force / terms.softest, 0.0)
+        noise = _positive_or(terms.softest, lambda: ROUND_OFF_LENGTH * force / terms.softest,
+                             0.0)
     scale = np.maximum(terms.free, terms.passed)
-    fallback = np.where(np.greater(terms.widest, 0.0), terms.widest,
-                        np.where(np.greater(terms.size, 0.0), terms.size, 1.0))
+    fallback = _positive_or(terms.widest, lambda: terms.widest,
+                            _positive_or(terms.size, lambda: terms.size, 1.0))
     return _scalar(np.where(scale > noise, scale, fallback))
 
 
@@ -120,9 +120,23 @@ def force_scale(terms: ScaleTerms, U: Any) -> Any:
         scale = max(terms.loads, terms.reactions, terms.contact, terms.unbalanced)
         return float(scale if scale > 0.0 else terms.softest * U if terms.softest > 0.0
                      else 1.0)
-    scale = np.maximum.reduce([terms.loads, terms.reactions, terms.contact, terms.unbalanced])
-    fallback = np.where(np.greater(terms.softest, 0.0), np.multiply(terms.softest, U), 1.0)
+    scale = _largest_force(terms)
+    fallback = _positive_or(terms.softest, lambda: np.multiply(terms.softest, U), 1.0)
     return _scalar(np.where(scale > 0.0, scale, fallback))
+
+
+def _positive_or(term: Any, then: Any, otherwise: Any) -> Any:
+    """then() where ``term`` > 0, else ``otherwise``: elementwise for an array term, by
+    Python for a number (numpy's where on numbers takes microseconds)."""
+    if isinstance(term, float):
+        return then() if term > 0.0 else otherwise
+    return np.where(np.greater(term, 0.0), then(), otherwise)
+
+
+def _largest_force(terms: ScaleTerms) -> Any:
+    """The largest of the force terms, each a number or an array (one entry per case)."""
+    return np.maximum(np.maximum(terms.loads, terms.reactions),
+                      np.maximum(terms.contact, terms.unbalanced))
 
 
 def _plain(terms: ScaleTerms) -> bool:
@@ -144,8 +158,12 @@ AUGMENTED_PER_STIFFNESS = 100.0
 
 def row_stiffness(K: sp.sparray, C: sp.csr_array) -> np.ndarray:
     """Per row, c_iᵀ K c_i / (c_iᵀ c_i)² (module docstring), read-only."""
-    squared = np.asarray(C.multiply(C).sum(axis=1)).reshape(-1)
-    energy = np.asarray((C @ K).multiply(C).sum(axis=1)).reshape(-1)
+    if C.shape[0] and np.all(np.diff(C.indptr) == 1):  # one dof per row (walls, a flat)
+        squared = C.data * C.data
+        energy = squared * K.diagonal()[C.indices]  # c² K_jj, as a chain reads its rows
+    else:
+        squared = np.asarray(C.multiply(C).sum(axis=1)).reshape(-1)
+        energy = np.asarray((C @ K).multiply(C).sum(axis=1)).reshape(-1)
     with np.errstate(divide="ignore", invalid="ignore"):
         s = energy / squared**2
     s.flags.writeable = False
@@ -158,7 +176,7 @@ def first_step_forces(p: np.ndarray, s: np.ndarray, transpose_times: Any,
     steepest-descent step, weighted by the rows' stiffness, towards closing the penetrations
     p (module docstring). Zeros where p is."""
     weighted = np.where(p > 0.0, s * p, 0.0)
-    if not np.any(weighted):
+    if not weighted.any():
         return np.zeros(p.size)
     push = transpose_times(weighted)  # Cᵀ(S p)
     flex = energy_of(push)  # pushᵀ K⁺ push

@@ -161,8 +161,11 @@ def cholmod_of(K: sp.csc_matrix, C: sp.csr_array) -> CholmodK | None:
         return None
     engine = Cholmod.of_pattern(sp.csc_matrix(abs(K) + gram))
     rows, columns, data = lower_triangle(K)
-    values = np.bincount(engine.position(rows, columns), weights=data,
-                         minlength=engine.rows.size).astype(float, copy=False)  # K empty: int
+    if np.array_equal(rows, engine.rows) and np.array_equal(columns, engine.columns):
+        values = data.astype(float)  # the rows add no entry to K's (one dof each): in place
+    else:
+        values = np.bincount(engine.position(rows, columns), weights=data,
+                             minlength=engine.rows.size).astype(float, copy=False)  # K empty
     try:
         engine.factor("K", values)
     except ArithmeticError:

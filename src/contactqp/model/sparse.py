@@ -172,7 +172,7 @@ class SparseModel(ContactModel):
         loads_held(model)
         # what K and C alone decide, where this model has worked it out already; never P or g
         for name in ("row_stiffness", "row_roots", "_entries", "_one_entry_per_row",
-                     "_free_run"):
+                     "_free_run", "_prescribed_rows", "_prescribed_free"):
             if name in self.__dict__:
                 model.__dict__[name] = self.__dict__[name]
         return model
@@ -237,10 +237,19 @@ class SparseModel(ContactModel):
 
     def support_change(self, du: np.ndarray) -> np.ndarray:
         """K_DI du: the prescribed dofs' forces of a move of the free ones."""
-        problem = self.problem
-        if not problem.prescribed.size:
+        if not self.problem.prescribed.size:
             return np.zeros(0)
-        return problem.K[problem.prescribed][:, self.free] @ du
+        return self._prescribed_free @ du
+
+    @cached_property
+    def _prescribed_rows(self) -> sp.csr_array:
+        """K_D: K's rows at the prescribed dofs (each check reads them several times)."""
+        return self.problem.K[self.problem.prescribed]
+
+    @cached_property
+    def _prescribed_free(self) -> sp.csr_array:
+        """K_DI: K's rows at the prescribed dofs, columns at the free ones."""
+        return self._prescribed_rows[:, self.free]
 
     @property
     def singular(self) -> bool:
@@ -330,8 +339,7 @@ class SparseModel(ContactModel):
         problem = self.problem
         if not problem.prescribed.size:
             return np.zeros(0)
-        K_D = problem.K[problem.prescribed]
-        return K_D @ u - problem.f[problem.prescribed]
+        return self._prescribed_rows @ u - problem.f[problem.prescribed]
 
 
 def _largest(values: np.ndarray) -> float:

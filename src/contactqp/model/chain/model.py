@@ -151,6 +151,9 @@ class Model(ContactModel):
         loaded = np.flatnonzero(push)
         if self.determinate is None or loaded.size > GREEN_ROWS:
             return super().energy_of(push)
+        if loaded.size == 1:  # one node pushed (one wall passed): φ_j f_j²
+            j = int(loaded[0])
+            return float(self.compliance_to_support[j] * push[j] ** 2)
         side = np.empty(loaded.size, dtype=np.intp)  # one number per bar and side of support
         for b, (block, support) in enumerate(self.determinate):
             inside = (loaded >= block.start) & (loaded < block.stop)
@@ -232,9 +235,11 @@ class Model(ContactModel):
         columns, inverse = self._contact_columns
         rows, _, values = self._entries
         push = np.bincount(inverse, values * contact_force[rows], minlength=columns.size)
-        if links is not None and self._free_run is None and n <= IMBALANCE_BLOCK:
-            # free nodes apart (supports inside the chain: a batch's cases), one block: the
-            # same subtraction N_(j−1) − N_j, read at the free nodes (the links 0 past the ends)
+        if links is not None and n <= IMBALANCE_BLOCK and (self._free_run is None
+                                                           or n <= SHORT_CHAIN):
+            # free nodes apart (supports inside the chain: a batch's cases), or few, one
+            # block: the same subtraction N_(j−1) − N_j, read at the free nodes (the links 0
+            # past the ends)
             ends = np.concatenate(([0.0], links, [0.0]))
             r = np.subtract(ends[:-1], ends[1:]).take(self.free)  # one gather, no free + 1
             r -= P
@@ -372,13 +377,16 @@ class Model(ContactModel):
                                     self.energy_of)
         unbalanced = (np.abs(np.bincount(self._floating_groups, self.P)[: len(self.floating)])
                       if self.floating else np.zeros(0))
-        reactions = self.reactions_of(u0, np.zeros(self.n_contacts))
+        if self.determinate is not None:  # each bar's one support carries the bar's loads
+            reactions = layout.bar_loads
+        else:
+            reactions = self.reactions_of(u0, np.zeros(self.n_contacts))
         return ScaleTerms(
             loads=largest(layout.nodal_loads), reactions=largest(reactions),
             contact=largest(contact), unbalanced=largest(unbalanced), free=largest(u0),
-            passed=largest(passed), widest=float(np.max(self.g, initial=0.0)),
-            size=float(layout.longest_bar), softest=float(self.band[0].min(initial=np.inf))
-            if self.band.size else 0.0)
+            passed=largest(passed), widest=float(np.maximum.reduce(self.g, initial=0.0)),
+            size=float(layout.longest_bar), softest=float(np.minimum.reduce(
+                self.band[0], initial=np.inf)) if self.band.size else 0.0)
 
     def full_displacements(self, u_free: np.ndarray) -> np.ndarray:
         """Displacements of every node, zero at the supports."""
@@ -480,6 +488,7 @@ def free_loads(layout: Layout) -> np.ndarray:
 FLOATING_METHODS = "lagrange, penalty, augmented, qp and nitsche"  # the methods that solve bars with no support
 
 GREEN_ROWS = 16  # right-hand sides with at most this many loaded rows use the Green's function
+SHORT_CHAIN = 1024  # free nodes up to which the imbalance gathers them even as one run
 IMBALANCE_BLOCK = 131072  # nodes per block of Model.largest_imbalance (1 MB: 4096-10⁶ measured, this fastest)
 
 
