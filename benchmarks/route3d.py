@@ -1,7 +1,7 @@
 """The Hertz sphere at 10⁶ dofs: what a direct factorisation and an iterative solve of K cost
 on this machine (issue 39's 3D goal; the measurements on docs/benchmarks.md, "3D at 10⁶ dofs").
 
-    python benchmarks/route3d.py [--level 6.5] [--cholmod]
+    python benchmarks/route3d.py [--level 6.5] [--cholmod] [--set-solve]
 
 Builds the sphere of benchmarks/hertz3d.py's level k (``sphere_on_flat``, δ = 10 µm; level
 6.5 has 1.1·10⁶ dofs, and building it takes about 4 minutes and 14 GB), then times on K on the
@@ -9,10 +9,17 @@ free dofs:
 
 - pyamg's smoothed aggregation with the six rigid-body modes as its near null space (set-up),
   and conjugate gradients with it on K u = f (the loads of the prescribed approach) to a
-  relative residual of 1e-10: iterations and time. pyamg is not a dependency of contactqp:
-  without it, this part says so;
+  relative residual of 1e-10: iterations and time, then the same solve again (pyamg makes its
+  coarsest level's solver at the first cycle, so the first solve's time holds it). pyamg is
+  not a dependency of contactqp: without it, this part says so;
 - with --cholmod, CHOLMOD through cvxopt: the symbolic analysis, the numeric factorisation and
-  one solve. At level 6.5 the factorisation did not fit in 24 GB beside the model.
+  one solve. At level 6.5 the factorisation did not fit in 24 GB beside the model;
+- with --set-solve (and pyamg), the step an iterative Lagrange method would repeat: the
+  answer with lagrange's final set of rows held, by conjugate gradients to a relative residual
+  of 1e-10 on the dofs those rows leave free (each row reads one dof, so holding it fixes that dof), preconditioned once by
+  K's own hierarchy restricted to those dofs and once by a hierarchy of K_FF made for the
+  set; iterations, time, and the distance to lagrange's answer over U. It runs lagrange
+  first (CHOLMOD or SuperLU), so it is for the levels a direct factorisation fits.
 
 Prints one line per step as it is measured, and the peak memory of the process.
 """
@@ -22,10 +29,12 @@ from __future__ import annotations
 import argparse
 import resource
 import time
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 
+import contactqp
 from contactqp.fem import sphere_on_flat
 from hertz3d import APPROACH, ZONE, level_sizes
 
@@ -54,6 +63,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--level", type=float, default=6.5, help="the sphere's level")
     parser.add_argument("--cholmod", action="store_true", help="also factor K by CHOLMOD")
+    parser.add_argument("--set-solve", action="store_true",
+                        help="also the set solve by conjugate gradients (needs pyamg)")
     args = parser.parse_args()
     fine, growth = level_sizes(args.level)
     start = time.perf_counter()
@@ -83,6 +94,15 @@ def main() -> None:
         relative = np.linalg.norm(f - K @ u) / np.linalg.norm(f)
         print(f"conjugate gradients: {len(residuals) - 1} iterations, {seconds:.1f} s, "
               f"relative residual {relative:.1e}", flush=True)
+        again: list[float] = []
+        start = time.perf_counter()
+        hierarchy.solve(f, tol=1e-10, accel="cg", maxiter=500, residuals=again)
+        print(f"the same solve again (pyamg makes its coarsest level's solver at the first "
+              f"cycle): {len(again) - 1} iterations, {time.perf_counter() - start:.1f} s",
+              flush=True)
+        if args.set_solve:
+            set_solves(problem, free, K, f, hierarchy,
+                       rigid_body_modes(model.mesh.p, problem.n)[free])
     if args.cholmod:
         from cvxopt import cholmod, matrix, spmatrix
 
@@ -99,6 +119,59 @@ def main() -> None:
         start = time.perf_counter()
         cholmod.solve(factor, rhs)
         print(f"CHOLMOD solve: {time.perf_counter() - start:.1f} s", flush=True)
+
+
+def set_solves(problem: contactqp.Problem, free: np.ndarray, K: sp.csr_matrix, f: np.ndarray,
+               hierarchy: Any, modes: np.ndarray) -> None:
+    """The answer on lagrange's final set by conjugate gradients (module docstring)."""
+    import pyamg
+    import scipy.sparse.linalg as spla
+
+    start = time.perf_counter()
+    result = contactqp.solve(problem, "lagrange")
+    held_rows = np.flatnonzero(result.contact_force > 0.0)
+    print(f"lagrange: {time.perf_counter() - start:.1f} s, verified {result.verified}, "
+          f"{held_rows.size} rows in contact", flush=True)
+    C = sp.csr_array(problem.C)[:, free]
+    if not np.all(np.diff(C.indptr) == 1):
+        print("a row reads more than one dof: no set solve by fixed dofs here")
+        return
+    dofs = C.indices[C.indptr[held_rows]]
+    fixed = problem.g[held_rows] / C.data[C.indptr[held_rows]]  # each held row on its gap
+    rest = np.setdiff1d(np.arange(K.shape[0]), dofs)
+    K_rest = sp.csr_matrix(K[rest][:, rest])
+    rhs = f[rest] - K[rest][:, dofs] @ fixed
+    U = result.displacement_scale
+
+    def report(label: str, u_rest: np.ndarray, steps: int, seconds: float) -> None:
+        u = np.zeros(K.shape[0])
+        u[rest], u[dofs] = u_rest, fixed
+        off = np.abs(u - result.u[free]).max() / U
+        print(f"set solve, {label}: {steps} iterations, {seconds:.1f} s; off lagrange's answer "
+              f"by {off:.1e} of U", flush=True)
+
+    whole = hierarchy.aspreconditioner(cycle="V")
+
+    def restricted(x: np.ndarray) -> np.ndarray:  # K's hierarchy on the dofs left free
+        padded = np.zeros(K.shape[0])
+        padded[rest] = x
+        return (whole @ padded)[rest]
+
+    steps = [0]
+    start = time.perf_counter()
+    u_rest, _ = spla.cg(K_rest, rhs, rtol=1e-10, maxiter=2000,
+                        M=spla.LinearOperator(K_rest.shape, matvec=restricted),
+                        callback=lambda _: steps.__setitem__(0, steps[0] + 1))
+    report("K's hierarchy restricted", u_rest, steps[0], time.perf_counter() - start)
+    start = time.perf_counter()
+    own = pyamg.smoothed_aggregation_solver(K_rest, B=modes[rest], max_coarse=500)
+    own.aspreconditioner(cycle="V") @ np.zeros(rest.size)  # its coarsest solver made here
+    made = time.perf_counter() - start
+    residuals: list[float] = []
+    start = time.perf_counter()
+    u_rest = own.solve(rhs, tol=1e-10, accel="cg", maxiter=500, residuals=residuals)
+    report(f"a hierarchy of K_FF of its own (set-up {made:.1f} s)", u_rest,
+           len(residuals) - 1, time.perf_counter() - start)
 
 
 if __name__ == "__main__":
