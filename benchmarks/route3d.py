@@ -16,9 +16,10 @@ free dofs:
   one solve. At level 6.5 the factorisation did not fit in 24 GB beside the model;
 - with --set-solve (and pyamg), the step an iterative Lagrange method would repeat: the
   answer with lagrange's final set of rows held, by conjugate gradients to a relative residual
-  of 1e-10 on the dofs those rows leave free (each row reads one dof, so holding it fixes that dof), preconditioned once by
-  K's own hierarchy restricted to those dofs and once by a hierarchy of K_FF made for the
-  set; iterations, time, and the distance to lagrange's answer over U. It runs lagrange
+  of 1e-10 on the dofs those rows leave free (each row reads one dof, so holding it fixes
+  that dof), preconditioned once by K's own hierarchy restricted to those dofs and once by a
+  hierarchy of K_FF made for the set; iterations, time, and the distance to lagrange's
+  answer over U. It runs lagrange
   first (CHOLMOD or SuperLU), so it is for the levels a direct factorisation fits.
 
 Prints one line per step as it is measured, and the peak memory of the process.
@@ -83,8 +84,8 @@ def main() -> None:
         print("pyamg is not installed (pip install pyamg): no iterative solve")
     else:
         start = time.perf_counter()
-        hierarchy = pyamg.smoothed_aggregation_solver(
-            K, B=rigid_body_modes(model.mesh.p, problem.n)[free], max_coarse=500)
+        modes = rigid_body_modes(model.mesh.p, problem.n)[free]
+        hierarchy = pyamg.smoothed_aggregation_solver(K, B=modes, max_coarse=500)
         print(f"pyamg {pyamg.__version__} set-up: {time.perf_counter() - start:.1f} s, "
               f"{len(hierarchy.levels)} levels, peak {peak_gb():.1f} GB", flush=True)
         residuals: list[float] = []
@@ -101,8 +102,7 @@ def main() -> None:
               f"cycle): {len(again) - 1} iterations, {time.perf_counter() - start:.1f} s",
               flush=True)
         if args.set_solve:
-            set_solves(problem, free, K, f, hierarchy,
-                       rigid_body_modes(model.mesh.p, problem.n)[free])
+            set_solves(problem, free, K, f, hierarchy, modes)
     if args.cholmod:
         from cvxopt import cholmod, matrix, spmatrix
 
@@ -139,8 +139,9 @@ def set_solves(problem: contactqp.Problem, free: np.ndarray, K: sp.csr_matrix, f
     dofs = C.indices[C.indptr[held_rows]]
     fixed = problem.g[held_rows] / C.data[C.indptr[held_rows]]  # each held row on its gap
     rest = np.setdiff1d(np.arange(K.shape[0]), dofs)
-    K_rest = sp.csr_matrix(K[rest][:, rest])
-    rhs = f[rest] - K[rest][:, dofs] @ fixed
+    rows_rest = K[rest]
+    K_rest = sp.csr_matrix(rows_rest[:, rest])
+    rhs = f[rest] - rows_rest[:, dofs] @ fixed
     U = result.displacement_scale
 
     def report(label: str, u_rest: np.ndarray, steps: int, seconds: float) -> None:

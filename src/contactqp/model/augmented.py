@@ -251,7 +251,8 @@ def augmented_set(model: SparseModel, rows: np.ndarray) -> AugmentedSet | None:
     weight = np.zeros(model.n_contacts)
     weight[rows] = rho
     found = AugmentedSet(rows.copy(), rho, augmented_values(model, weight), key,
-                         update=_update(model, rows), gram=gram)
+                         update=_update(model, rows), gram=gram,
+                         held_rows=(model.C, C_A, C_A.T))
     while len(sets) >= KEPT:
         sets.pop(next(iter(sets)))
     sets[key] = found
