@@ -348,3 +348,52 @@ def test_a_wrong_answer_on_many_rows_is_refused_after_a_few_rows_own_stiffness(m
     asked.clear()
     residuals_module.residuals(model, np.zeros(n), np.zeros(n), np.zeros(n, dtype=bool))
     assert asked == [n]
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), equalities=st.integers(0, 3))
+def test_the_force_residuals_are_their_definitions_row_by_row(seed, equalities):
+    """Springs in parallel, K = diag(k), one row per dof (c_i = ±1): each row's own stiffness is
+    s_i = k_i, and so is its bound s̄_i, so the feasibility, complementarity and sign residuals
+    are their definitions, worked out here row by row in plain Python: max p⁺·k (|p|·k on an
+    equality row), max min(λ⁺, (−p)⁺·k) and max λ⁻ over the inequality rows, each over F. The
+    answers are random (rows past their gaps, open with a force, pulling; each by 0.1 to
+    1e-14 of F), with or without equality rows (the residuals read the rows with masks
+    there, in one pass without)."""
+    import importlib
+
+    import scipy.sparse as sp
+
+    from contactqp.model.sparse import problem_model
+
+    residuals_module = importlib.import_module("contactqp.check.residuals")
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 30))
+    k = rng.uniform(0.5, 5.0, n) * 10.0 ** rng.integers(-3, 4)
+    sign = rng.choice([-1.0, 1.0], n)
+    problem = contactqp.Problem(sp.diags_array(k).tocsr(), rng.normal(size=n),
+                                sp.csr_array(sp.diags_array(sign)), rng.normal(size=n) * 1e-2)
+    model = problem_model(problem)
+    equality = np.zeros(n, dtype=bool)
+    equality[rng.permutation(n)[:equalities]] = True
+    F = model.force_scale
+    # residuals from 0.1·F down to 1e-14·F: below SIGNIFICANT = 1e-9 of F the rows are read
+    # once, above it again with each row's own s
+    size = F * 10.0 ** -rng.uniform(1, 14)
+    p = list(rng.normal(size=n) * size / k)  # the penetration, as a force ~ size
+    u = sign * (np.array(p) + problem.g)  # C u − g = p (sign² = 1)
+    p = [sign[i] * u[i] - problem.g[i] for i in range(n)]  # as rounded
+    lam = rng.normal(size=n) * size
+    lam[rng.random(n) < 0.3] = 0.0
+    found, pen = residuals_module.residuals(model, u, lam, equality)
+    passed = [abs(p[i]) * k[i] if equality[i] else max(p[i], 0.0) * k[i] for i in range(n)]
+    both = [min(max(lam[i], 0.0), max(-p[i], 0.0) * k[i]) for i in range(n) if not equality[i]]
+    pulls = [max(-lam[i], 0.0) for i in range(n) if not equality[i]]
+    np.testing.assert_allclose(pen, p, rtol=0, atol=1e-15)
+    assert found["feasibility"] == pytest.approx(max(passed) / F, rel=1e-12)
+    if equality.all():
+        assert found["complementarity"] is None and found["sign"] is None
+    else:
+        assert found["complementarity"] == pytest.approx(max(both + [0.0]) / F, rel=1e-12,
+                                                         abs=1e-300)
+        assert found["sign"] == pytest.approx(max(pulls + [0.0]) / F, rel=1e-12, abs=1e-300)

@@ -278,3 +278,40 @@ def test_semismooth_newton_by_set_solves_is_right_where_verified(seed):
     if found.verified:
         assert np.abs(found.contact_force - exact.contact_force).max(initial=0.0) <= (
             found.force_error_bound * (1 + 1e-9) + 1e-12 * found.force_scale)
+
+
+@pytest.mark.parametrize("method", ["pgs", "lemke", "semismooth_newton"])
+def test_the_lcp_of_a_users_model_keeps_no_columns_past_their_size(method, monkeypatch):
+    """A user's model with CHOLMOD's factor forms W a block of rows at a time and keeps no
+    K⁻¹Cᵀ, so the LCP_ENTRIES limit on that dense array does not hold it back (set to 1 here):
+    pgs, lemke and semismooth Newton on W solve the Hertz cylinder of contactqp.fem, verified,
+    within their bounds of lagrange's answer, without the columns (the chain's route that
+    forms them is made to fail). With SuperLU's factor (CHOLMOD made absent), whose forward
+    columns are dense on the dofs they reach, the limit still holds: pgs and lemke refuse,
+    naming it, and semismooth Newton takes its set solves."""
+    pytest.importorskip("skfem")
+    pytest.importorskip("cvxopt")
+    from contactqp.fem import cylinder_on_flat
+    from contactqp.methods import complementarity
+    from contactqp.model import factor
+
+    problem = cylinder_on_flat(fine=0.5).problem
+    exact = contactqp.solve(problem, "lagrange")
+    monkeypatch.setattr(complementarity, "LCP_ENTRIES", 1)
+    monkeypatch.setattr(complementarity, "SET_ROUTE_ROWS", 10**9)  # semismooth Newton on W
+    monkeypatch.setattr(complementarity, "flexibility",
+                        lambda problem: pytest.fail("K⁻¹Cᵀ formed"))
+    found = contactqp.solve(problem, method)
+    assert found.verified, found.message
+    assert "route" not in found.info  # on W, not by set solves
+    reach = found.force_error_bound + exact.force_error_bound
+    assert np.abs(found.contact_force - exact.contact_force).max() <= reach
+    reach = found.displacement_error_bound + exact.displacement_error_bound
+    assert np.abs(found.u - exact.u).max() <= reach
+    monkeypatch.setattr(factor, "cholmod_installed", lambda: False)
+    fresh = cylinder_on_flat(fine=0.5).problem
+    if method == "semismooth_newton":
+        assert contactqp.solve(fresh, method).info["route"] == "set solves"
+    else:
+        with pytest.raises(contactqp.ContactqpError, match="and 1 entries"):
+            contactqp.solve(fresh, method)

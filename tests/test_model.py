@@ -57,7 +57,7 @@ def test_condensed_model_is_the_flexibility_at_the_walls():
                                     rel=1e-12)
 
 
-@pytest.mark.parametrize("seed", range(30))
+@pytest.mark.parametrize("seed", [*range(30), 404007])
 def test_the_condensed_chain_is_the_inverse_of_the_flexibility(seed):
     """S⁻¹ (tridiagonal, from series compliances) against the dense inverse of B K⁻¹ Bᵀ, and
     the recovered displacements against dense K⁻¹(P − Cᵀλ), on random scenes (several bars,
@@ -71,7 +71,10 @@ def test_the_condensed_chain_is_the_inverse_of_the_flexibility(seed):
     nodes = np.flatnonzero(np.abs(model.C.toarray()).sum(axis=0))
     flexibility = np.linalg.inv(K)[np.ix_(nodes, nodes)]
     expected = np.linalg.inv(flexibility)
-    assert np.abs(small.K.toarray() - expected).max() <= 1e-9 * np.abs(expected).max()
+    # a scene with no contact (seed 404007) condenses to no node: S⁻¹ is 0 x 0
+    assert small.K.shape == expected.shape
+    assert np.abs(small.K.toarray() - expected).max(initial=0.0) <= (
+        1e-9 * np.abs(expected).max(initial=0.0))
     w0 = np.linalg.solve(K, model.P)[nodes]
     # S⁻¹ w₀ cancels: its round-off is relative to the terms summed, |S⁻¹| |w₀|
     assert np.all(np.abs(small.P - expected @ w0) <= 1e-8 * (np.abs(expected) @ np.abs(w0)))
@@ -246,6 +249,34 @@ def test_the_checks_imbalance_is_k_u_minus_p_plus_c_transpose_lambda(seed, float
         for found in (model.largest_imbalance(u_free, lam),
                       model.largest_imbalance(u_free, lam, links)):
             assert found == pytest.approx(exact, rel=1e-12, abs=1e-9 * size)
+
+
+@pytest.mark.parametrize("block", [1, 7, 131072])
+@pytest.mark.parametrize("build", ["obstacle", "channel", "flat_patch"])
+@pytest.mark.parametrize("size", [5, 1500])
+def test_the_imbalance_with_a_wall_at_every_node_is_k_u_minus_p_plus_c_transpose_lambda(
+        build, size, block, monkeypatch):
+    """As above, on the scenes with a wall beside every free node (one wall or two per node:
+    C's entries one per row, every free node touched, so Cᵀλ adds node by node), as one run of
+    free nodes up to SHORT_CHAIN and past it: their exact answers and random ones."""
+    import contactqp.model.chain.model as chain_model
+    from contactqp.model import element_forces, link_forces, scene_model
+
+    monkeypatch.setattr(chain_model, "IMBALANCE_BLOCK", block)
+    model = scene_model(getattr(contactqp.builders, build)(size))
+    rng = np.random.default_rng(size)
+    solved = contactqp.solve(model.layout.scene, "lagrange")
+    answers = [(model.free_part(solved.u), solved.contact_force),
+               (rng.standard_normal(model.n_free) / model.band[0].max(),
+                rng.standard_normal(model.n_contacts) * max(np.abs(model.P).max(initial=0), 1))]
+    for u_free, lam in answers:
+        exact = np.abs(model.K @ u_free - model.P + model.C.T @ lam).max(initial=0.0)
+        links = link_forces(model.layout, element_forces(model.layout,
+                                                         model.full_displacements(u_free)))
+        size_ = max(np.abs(lam).max(initial=0.0), np.abs(model.P).max(initial=0.0), 1.0)
+        for found in (model.largest_imbalance(u_free, lam),
+                      model.largest_imbalance(u_free, lam, links)):
+            assert found == pytest.approx(exact, rel=1e-12, abs=1e-9 * size_)
 
 
 @pytest.mark.parametrize("seed", range(30))

@@ -115,23 +115,22 @@ def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality
     pen = model.C_times(u_free)
     pen -= model.g
     bound = model.row_stiffness
-    pushing = np.maximum(lam, 0.0)
     if equality.any():
-        unilateral = ~equality
-        passed = np.where(equality, np.abs(pen), np.maximum(pen, 0.0))
-        both = np.where(unilateral, np.maximum(-pen, 0.0), 0.0)
-        pulling = float((-lam[unilateral]).max(initial=0.0))
-    else:  # every row unilateral (a scene's, most problems'): no masks, fewer arrays
-        passed = np.maximum(pen, 0.0)
-        both = np.negative(pen)
-        np.maximum(both, 0.0, out=both)
-        pulling = max(0.0, -float(lam.min(initial=0.0)))
-    passed *= bound  # p⁺·s̄
-    both *= bound  # (−p)⁺·s̄, then min(λ⁺, (−p)⁺·s̄)
-    np.minimum(pushing, both, out=both)
-    top_passed = np.maximum.reduce(passed, initial=0.0)  # NaN where a row's is
-    top_both = np.maximum.reduce(both, initial=0.0)
+        passed, both, pulling = _row_forces(pen, lam, bound, equality)
+        top_passed = np.maximum.reduce(passed, initial=0.0)  # NaN where a row's is
+        top_both = np.maximum.reduce(both, initial=0.0)
+    else:  # every row unilateral (a scene's, most problems'): the largest of each, fused
+        seen = pen * bound  # p·s̄: pushed past (+) or standing open (−), as a force
+        top_passed = np.maximum.reduce(seen, initial=0.0)  # max p⁺·s̄ (s̄ >= 0)
+        t = np.negative(lam)
+        pulling = float(np.maximum.reduce(t, initial=0.0))
+        np.maximum(t, seen, out=t)  # max(−λ, p·s̄): min(λ⁺, (−p)⁺·s̄) = max(0, −that)
+        top_both = 0.0 - np.minimum.reduce(t, initial=0.0)  # NaN where a row's is
+        passed = both = None  # made where a row is read again
     if not (top_passed <= SIGNIFICANT * F and top_both <= SIGNIFICANT * F):
+        if passed is None:
+            passed, both, pulling = _row_forces(pen, lam, bound, equality)
+        pushing = np.maximum(lam, 0.0)
         largest = np.maximum(passed, both)
         rows = np.flatnonzero(~(largest <= SIGNIFICANT * F))
         size = rows.size
@@ -162,6 +161,21 @@ def residuals(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, equality
     if equality.all():
         found["complementarity"] = found["sign"] = None
     return found, pen
+
+
+def _row_forces(pen: np.ndarray, lam: np.ndarray, bound: np.ndarray, equality: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, float]:
+    """(p⁺·s̄ per row, min(λ⁺, (−p)⁺·s̄) per row, the largest pull) of the penetration ``pen``
+    and bounds ``bound`` (an equality row: |p|·s̄, and 0 for the second)."""
+    pushing = np.maximum(lam, 0.0)
+    unilateral = ~equality
+    passed = np.where(equality, np.abs(pen), np.maximum(pen, 0.0))
+    both = np.where(unilateral, np.maximum(-pen, 0.0), 0.0)
+    pulling = float((-lam[unilateral]).max(initial=0.0))
+    passed *= bound  # p⁺·s̄
+    both *= bound  # (−p)⁺·s̄, then min(λ⁺, (−p)⁺·s̄)
+    np.minimum(pushing, both, out=both)
+    return passed, both, pulling
 
 
 SIGNIFICANT = 1e-9  # of F: a row whose residual s̄ puts below this needs no solve for its s

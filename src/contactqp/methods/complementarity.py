@@ -22,7 +22,9 @@ natural-map residual of that scaled problem, ‖min(z, M z + q̃)‖∞ / ‖q̃
 
 The answer is u = K⁻¹P − K⁻¹Cᵀ λ; any force carried round a loop of rows that hold a node both
 ways is taken out (:func:`contactqp.model.without_circulation`). W is dense (rows × rows) and
-K⁻¹Cᵀ free nodes × rows: up to LCP_ROWS rows (a SolverError beyond, which says so), but for
+K⁻¹Cᵀ free nodes × rows: up to LCP_ROWS rows (a SolverError beyond, which says so) and
+LCP_ENTRIES entries of K⁻¹Cᵀ; a user's model with CHOLMOD's factor forms W a block of rows at
+a time and keeps no K⁻¹Cᵀ (u is one solve at the end), so only LCP_ROWS holds there; but for
 ``semismooth_newton`` with "min" on a user's (sparse) model: past SET_ROUTE_ROWS rows it takes
 its Newton steps as the model's set solves, without W (:func:`_newton_on_sets`; where those
 sets come back, within the LCP's size, the steps on W go on from the start).
@@ -61,19 +63,30 @@ HELD_OPEN = 1e-9  # a held row left open by more than this (of q's largest entry
 
 
 def contact_lcp(problem: Model | Condensed | ContactModel
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(W, q, K⁻¹P, K⁻¹Cᵀ) of a problem (module docstring); a SolverError past LCP_ROWS."""
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    """(W, q, K⁻¹P, K⁻¹Cᵀ) of a problem (module docstring); a SolverError past LCP_ROWS, or
+    past LCP_ENTRIES of K⁻¹Cᵀ where the model has no ``flexibility_in_blocks`` (a model that
+    has forms W a block of rows at a time and gives None for K⁻¹Cᵀ: the answer's u is then
+    one solve, :func:`_answer`)."""
     rows = problem.n_contacts
-    if rows > LCP_ROWS or problem.n_free * rows > LCP_ENTRIES:
+    if _past_lcp(problem):
         # a user's problem has dofs, a bar scene nodes: the refusal speaks the caller's words
         what, unknowns = (("problem", "free dofs") if problem.layout is None
                           else ("scene", "free nodes"))
+        if problem.flexibility_in_blocks:
+            raise SolverError(f"the complementarity methods form the dense flexibility "
+                              f"W = C K⁻¹ Cᵀ (rows x rows, a solve per row): up to {LCP_ROWS} "
+                              f"contact rows; this {what} has {rows} contact rows (use "
+                              f"lagrange or semismooth_newton)")
         raise SolverError(f"the complementarity methods form the dense flexibility W = C K⁻¹ Cᵀ "
                           f"(rows x rows) and K⁻¹Cᵀ: up to {LCP_ROWS} contact rows and "
                           f"{LCP_ENTRIES} entries; this {what} has {rows} contact rows and "
                           f"{problem.n_free} {unknowns} (use lagrange)")
-    columns, W = flexibility(problem)
     u_free = problem.free_displacement
+    if problem.flexibility_in_blocks:
+        columns, W = None, problem.flexibility(np.arange(rows))
+    else:
+        columns, W = flexibility(problem)
     return W, problem.g - problem.C @ u_free, u_free, columns
 
 
@@ -94,15 +107,24 @@ def _answer(problem: Model | Condensed, contact: str, solver: str, z_solver) -> 
         # least squares: rows that repeat each other's constraint leave W singular, and the
         # least-norm forces are as good as any (an inconsistent set is named by the caller)
         lam = np.linalg.lstsq(W, -q, rcond=None)[0] if q.size else np.zeros(0)
-        return Solution(u_free - columns @ lam, lam, solver=solver, status="solved")
+        return Solution(_moved(problem, u_free, columns, lam), lam, solver=solver,
+                        status="solved")
     M, q_scaled, D = unit_diagonal(W, q)
     z, iterations, converged, status, info = z_solver(M, q_scaled)
     residual = natural_map(z, M @ z + q_scaled, q_scaled)
     # a user's problem has no chain whose loops of rows could carry a force round
     lam = D * z if problem.layout is None else without_circulation(problem, D * z)
-    return Solution(u_free - columns @ lam, lam, solver=solver, iterations=iterations,
-                    status=status, claimed_success=converged,
+    return Solution(_moved(problem, u_free, columns, lam), lam, solver=solver,
+                    iterations=iterations, status=status, claimed_success=converged,
                     info={**info, "natural_map": residual})
+
+
+def _moved(problem: Model | Condensed | ContactModel, u_free: np.ndarray,
+           columns: np.ndarray | None, lam: np.ndarray) -> np.ndarray:
+    """u = K⁻¹P − K⁻¹Cᵀλ: from the columns K⁻¹Cᵀ where the LCP kept them, else one solve."""
+    if columns is not None:
+        return u_free - columns @ lam
+    return u_free - problem.solve_K(problem.C_transpose_times(lam))
 
 
 def _at_most(method: str, rows: int, limit: int, why: str) -> None:
@@ -233,9 +255,11 @@ def solve_semismooth_newton(problem: Model | Condensed, contact: str, *, ncp: st
 
 
 def _past_lcp(problem: ContactModel) -> bool:
-    """Whether the LCP is past what :func:`contact_lcp` forms (W and K⁻¹Cᵀ dense)."""
+    """Whether the LCP is past what :func:`contact_lcp` forms (W dense, and K⁻¹Cᵀ dense
+    where the model does not form W in blocks)."""
     rows = problem.n_contacts
-    return rows > LCP_ROWS or problem.n_free * rows > LCP_ENTRIES
+    return rows > LCP_ROWS or (not problem.flexibility_in_blocks
+                               and problem.n_free * rows > LCP_ENTRIES)
 
 
 def _newton_on_sets(model: ContactModel, max_iterations: int) -> Solution:

@@ -16,7 +16,9 @@ with the answer's contact forces λ (one per row, positive when the row pushes: 
   a chain in blocks from its band or its element forces), ``free_part`` (u at the free dofs,
   a view where they are one run);
 - its solves: ``solve_K`` (K⁻¹), ``free_displacement`` (K⁻¹P), ``set_solve`` (the exact
-  answer with a set of rows held on their gaps, and its corrections);
+  answer with a set of rows held on their gaps, and its corrections); where
+  ``flexibility_in_blocks`` is True, ``flexibility(rows)`` forms W = C K⁻¹ Cᵀ of the rows a
+  block of columns at a time, keeping no K⁻¹Cᵀ (a user's model with CHOLMOD's factor);
 - what it is in the user's words: ``full_displacements`` (every dof), ``reactions`` (the
   force of each support or prescribed dof), ``units`` (force, length);
 - the scales the check measures against, by one rule (:func:`force_scale`,
@@ -259,6 +261,9 @@ class ContactModel(ABC):
     P: np.ndarray
     C: sp.csr_array
     g: np.ndarray
+    # whether flexibility(rows) forms W a block of solved columns at a time, holding no
+    # K⁻¹Cᵀ of every row (module docstring)
+    flexibility_in_blocks = False
 
     # --- the algebra
     @property

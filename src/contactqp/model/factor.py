@@ -89,10 +89,15 @@ class Cholmod:
     def of_pattern(cls, pattern: sp.csc_matrix) -> Cholmod:
         """The analysis of a symmetric ``pattern`` (its lower triangle, explicit zeros
         kept), CHOLMOD's own ordering (AMD)."""
+        rows, columns, _ = lower_triangle(pattern)
+        return cls.of_triangle(pattern.shape[0], rows, columns)
+
+    @classmethod
+    def of_triangle(cls, n: int, rows: np.ndarray, columns: np.ndarray) -> Cholmod:
+        """The analysis of the pattern whose lower triangle has entries at (``rows``,
+        ``columns``), in CSC order (:func:`lower_triangle`)."""
         from cvxopt import cholmod, spmatrix
 
-        rows, columns, _ = lower_triangle(pattern)
-        n = pattern.shape[0]
         matrix = spmatrix(np.ones(rows.size), rows, columns, (n, n))
         return cls(n, rows, columns, cholmod.symbolic(matrix), matrix)
 
@@ -156,16 +161,23 @@ def cholmod_of(K: sp.csc_matrix, C: sp.csr_array) -> CholmodK | None:
     entry, then say which; CHOLMOD's post-ordering keeps its pivots' dofs to itself)."""
     if not cholmod_installed() or K.shape[0] == 0:
         return None
-    gram = abs(C.T) @ abs(C)
-    if gram.nnz > FILL * max(K.nnz, 1):
-        return None
-    engine = Cholmod.of_pattern(sp.csc_matrix(abs(K) + gram))
     rows, columns, data = lower_triangle(K)
-    if np.array_equal(rows, engine.rows) and np.array_equal(columns, engine.columns):
-        values = data.astype(float)  # the rows add no entry to K's (one dof each): in place
+    if (np.diff(C.indptr).max(initial=0) <= 1
+            and np.count_nonzero(rows == columns) == K.shape[0]):
+        # each row reads one dof at most and K keeps every diagonal entry: CᵀC, diagonal,
+        # adds no entry to K's pattern (the Hertz models), so no sum of patterns is formed
+        engine = Cholmod.of_triangle(K.shape[0], rows, columns)
+        values = data.astype(float)  # K's values in place
     else:
-        values = np.bincount(engine.position(rows, columns), weights=data,
-                             minlength=engine.rows.size).astype(float, copy=False)  # K empty
+        gram = abs(C.T) @ abs(C)
+        if gram.nnz > FILL * max(K.nnz, 1):
+            return None
+        engine = Cholmod.of_pattern(sp.csc_matrix(abs(K) + gram))
+        if np.array_equal(rows, engine.rows) and np.array_equal(columns, engine.columns):
+            values = data.astype(float)  # the rows add no entry to K's: in place
+        else:
+            values = np.bincount(engine.position(rows, columns), weights=data,
+                                 minlength=engine.rows.size).astype(float, copy=False)
     try:
         engine.factor("K", values)
     except ArithmeticError:
@@ -193,6 +205,8 @@ class ColumnCache:
     sets: dict[bytes, Any] = field(default_factory=dict)  # augmented set solves, by rows
     products: Any = None  # every row's CᵀC on the augmented pattern (model.augmented)
     set_factorisations: int = 0  # numeric factorisations of augmented matrices
+    compliance: np.ndarray | None = None  # W_ii per row where solved so far (NaN elsewhere;
+    # CHOLMOD's factor: each is a solve, asked by the LCP's W and the check's own s)
 
     def add(self, rows: list[int], nodes: np.ndarray, y: np.ndarray) -> None:
         """Keep the columns y (on ``nodes``) of ``rows``."""

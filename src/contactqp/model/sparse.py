@@ -132,9 +132,15 @@ class SparseModel(ContactModel):
             C_block = C_rows[where]
             yield where, C_block, self.factor.solve(C_block.T.toarray())
 
+    @property
+    def flexibility_in_blocks(self) -> bool:
+        """Whether :meth:`flexibility` solves a block of columns at a time (CHOLMOD's
+        factor); SuperLU's forward columns are kept dense on the dofs they reach."""
+        return isinstance(self.factor, CholmodK)
+
     def flexibility(self, rows: np.ndarray) -> np.ndarray:
         """W = C_rows K⁻¹ C_rowsᵀ (rows x rows, dense): with CHOLMOD's factor by solves with
-        the rows' columns, else SuperLU gives Pr K Prᵀ = L U with the
+        the rows' columns (each W_ii kept), else SuperLU gives Pr K Prᵀ = L U with the
         diagonal pivots kept, and K symmetric makes U = D Lᵀ (D = diag U), so K⁻¹ =
         Prᵀ U⁻¹ D U⁻ᵀ Pr and W = Zᵀ D Z with Z = U⁻ᵀ Pr Cᵀ: one sparse forward solve per row
         (:func:`forward_columns`), computed once."""
@@ -147,7 +153,9 @@ class SparseModel(ContactModel):
             for where, _, moved in self._solved_columns(C_rows):
                 W[:, where] = C_rows @ moved
             cache.solves += rows.size
-            return 0.5 * (W + W.T)
+            W = 0.5 * (W + W.T)
+            self._kept_compliance()[rows] = np.diagonal(W)
+            return W
         new = [int(i) for i in dict.fromkeys(rows.tolist()) if int(i) not in cache.where]
         if new:
             if self.factor is None:
@@ -217,11 +225,15 @@ class SparseModel(ContactModel):
         rows = np.asarray(rows, dtype=np.intp)
         if not rows.size:
             return np.zeros(0)
-        if isinstance(self.factor, CholmodK):  # one solve per row: only the rows asked for,
-            # a block of columns at a time (K⁻¹C_rowsᵀ of 10⁴ rows on 3.3·10⁵ dofs: 25 GiB)
-            compliance = np.empty(rows.size)
-            for where, C_block, moved in self._solved_columns(self.C[rows]):
-                compliance[where] = np.asarray(C_block.multiply(moved.T).sum(axis=1)).reshape(-1)
+        if isinstance(self.factor, CholmodK):  # one solve per row: only the rows asked for
+            # and not solved before (W's diagonal, kept), a block of columns at a time
+            # (K⁻¹C_rowsᵀ of 10⁴ rows on 3.3·10⁵ dofs: 25 GiB)
+            kept = self._kept_compliance()
+            compliance = kept[rows]
+            new = np.unique(rows[np.isnan(compliance)])
+            for where, C_block, moved in self._solved_columns(self.C[new]):
+                kept[new[where]] = np.asarray(C_block.multiply(moved.T).sum(axis=1)).reshape(-1)
+            compliance = kept[rows]
         elif self.factor is not None:
             compliance = np.diagonal(self.flexibility(rows)).copy()
         else:
@@ -234,6 +246,12 @@ class SparseModel(ContactModel):
         with np.errstate(divide="ignore"):
             return np.where(np.isfinite(compliance) & (compliance > 0.0), 1.0 / compliance,
                             np.where(compliance == 0.0, np.inf, 0.0))
+
+    def _kept_compliance(self) -> np.ndarray:
+        """W_ii of every row solved so far (NaN for the others), kept with the factor."""
+        if self.cache.compliance is None:
+            self.cache.compliance = np.full(self.n_contacts, np.nan)
+        return self.cache.compliance
 
     def support_change(self, du: np.ndarray) -> np.ndarray:
         """K_DI du: the prescribed dofs' forces of a move of the free ones."""

@@ -35,6 +35,7 @@ class Condensed:
     full: Model
     nodes: np.ndarray  # the contact nodes, as unknowns of ``full``
     floating = ()  # condensing solves with K: every bar has a support (Model.floating)
+    flexibility_in_blocks = False  # as a Model (contactqp.model.base)
     band: np.ndarray
     P: np.ndarray
     C: sp.csr_array
@@ -51,8 +52,10 @@ class Condensed:
 
     @cached_property
     def K(self) -> sp.csr_array:
-        """S⁻¹ as a sparse tridiagonal matrix."""
+        """S⁻¹ as a sparse tridiagonal matrix (diagonal alone for fewer than two nodes)."""
         band = self.band
+        if band.shape[1] < 2:  # no neighbours: scipy refuses the off-diagonals' offsets
+            return sp.csr_array(sp.diags_array(band[0], shape=(band.shape[1],) * 2))
         return sp.csr_array(sp.diags_array([band[1, :-1], band[0], band[1, :-1]],
                                            offsets=[-1, 0, 1]))
 

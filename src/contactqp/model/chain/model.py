@@ -234,7 +234,9 @@ class Model(ContactModel):
         band, P, n = self.band, self.P, u_free.size
         columns, inverse = self._contact_columns
         rows, _, values = self._entries
-        push = np.bincount(inverse, values * contact_force[rows], minlength=columns.size)
+        force = contact_force if self._one_entry_per_row else contact_force[rows]
+        push = np.bincount(inverse, values * force, minlength=columns.size)
+        every = columns.size == n  # every free node touched: columns is 0 … n − 1
         if links is not None and n <= IMBALANCE_BLOCK and (self._free_run is None
                                                            or n <= SHORT_CHAIN):
             # free nodes apart (supports inside the chain: a batch's cases), or few, one
@@ -243,7 +245,10 @@ class Model(ContactModel):
             ends = np.concatenate(([0.0], links, [0.0]))
             r = np.subtract(ends[:-1], ends[1:]).take(self.free)  # one gather, no free + 1
             r -= P
-            r[columns] += push
+            if every:
+                r += push
+            else:
+                r[columns] += push
             return float(np.abs(r, out=r).max(initial=0.0))
         edges = np.searchsorted(columns, np.arange(0, n + IMBALANCE_BLOCK, IMBALANCE_BLOCK))
         run = self._free_run if links is not None else None
@@ -268,7 +273,10 @@ class Model(ContactModel):
                 r[:high - start] += band[1, start:high] * u_free[start + 1:high + 1]
             r -= P[start:stop]
             a, b = edges[k], edges[k + 1]
-            r[columns[a:b] - start] += push[a:b]
+            if every:
+                r += push[a:b]
+            else:
+                r[columns[a:b] - start] += push[a:b]
             top = max(top, float(np.abs(r, out=r).max(initial=0.0)))
         return top
 
