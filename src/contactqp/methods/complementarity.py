@@ -65,9 +65,9 @@ HELD_OPEN = 1e-9  # a held row left open by more than this (of q's largest entry
 def contact_lcp(problem: Model | Condensed | ContactModel
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
     """(W, q, K⁻¹P, K⁻¹Cᵀ) of a problem (module docstring); a SolverError past LCP_ROWS, or
-    past LCP_ENTRIES of K⁻¹Cᵀ where the model has no ``flexibility_in_blocks`` (a model that
-    has forms W a block of rows at a time and gives None for K⁻¹Cᵀ: the answer's u is then
-    one solve, :func:`_answer`)."""
+    past LCP_ENTRIES of K⁻¹Cᵀ where the model cannot form W in blocks
+    (``flexibility_in_blocks``); a model that can forms W a block of rows at a time and gives
+    None for K⁻¹Cᵀ, and the answer's u is then one solve (:func:`_answer`)."""
     rows = problem.n_contacts
     if _past_lcp(problem):
         # a user's problem has dofs, a bar scene nodes: the refusal speaks the caller's words
