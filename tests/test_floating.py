@@ -298,20 +298,22 @@ def test_floating_bars_held_through_repeated_rows_by_lagrange():
     (random_scene seed 404007, floating 0.5; found by a fresh-seed property run): the chain's
     active set meets a singular set, and Lemke's handover needs K⁻¹. Lagrange then solves the
     scene as its problem, whose set solves take a K that contact holds, and hands the answer
-    back to the chain, saying so: its answer is verified, within its bounds of the exact reference (rational arithmetic), with
-    the bar quantities of the scene. Asked with an option of the chain's own, it still says
-    why it could not solve."""
+    back to the chain, saying so: its answer is verified by the chain's check, within its
+    bounds of the exact reference (rational arithmetic), with the scene's bar quantities;
+    the same with the loop's own options and through a prepared scene (the handover is the
+    method's, not the front end's)."""
     from contactqp.random_scenes import random_scene
 
     scene = random_scene(np.random.default_rng(404007), floating=0.5)
     exact = reference(scene)
-    found = contactqp.solve(scene, "lagrange")
-    assert found.verified and found.method == "lagrange"
-    assert found.info["route"].startswith("the scene as its problem")
-    assert found.layout is not None  # the chain's Result, checked by the chain's check
-    assert np.abs(found.contact_force - exact.contact_force).max() <= found.force_error_bound
-    assert np.abs(found.u - exact.displacement).max() <= found.displacement_error_bound
-    assert found.element_force is not None
-    assert found.element_force.size == sum(bar.n_nodes - 1 for bar in scene.bars)
-    with pytest.raises(contactqp.SolverError, match="singular"):
-        contactqp.solve(scene, "lagrange", max_iterations=100)
+    for found in (contactqp.solve(scene, "lagrange"),
+                  contactqp.solve(scene, "lagrange", max_iterations=100, active_set="passed"),
+                  contactqp.prepare(scene, "lagrange").solve()):
+        assert found.verified and found.method == "lagrange"
+        assert "then the scene as its problem" in found.info["active_set"]
+        assert found.layout is not None  # the chain's Result, checked by the chain's check
+        assert np.abs(found.contact_force - exact.contact_force).max() <= (
+            found.force_error_bound)
+        assert np.abs(found.u - exact.displacement).max() <= found.displacement_error_bound
+        assert found.element_force is not None
+        assert found.element_force.size == sum(bar.n_nodes - 1 for bar in scene.bars)

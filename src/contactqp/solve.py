@@ -154,32 +154,11 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
     model = scene_model(scene)  # built once per scene object
     built = time.perf_counter()
     formulation = chosen_formulation(model, spec, formulation, contact)
-    try:
-        solution = solve_model(model, spec, contact, formulation, options)
-    except SolverError:
-        if not (spec.name == "lagrange" and model.floating and formulation == "full"
-                and contact == "inequality" and not options):
-            raise
-        solution = as_its_problem(scene, model)
+    solution = solve_model(model, spec, contact, formulation, options)
     solved = time.perf_counter()
     options = {**options, "formulation": formulation} if formulation != "full" else options
     return make_result(model, solution, method=method, contact=contact, options=options,
                        timings={"build": built - start, "solve": solved - built})
-
-
-def as_its_problem(scene: Scene, model: Model) -> Solution:
-    """Lagrange's answer to a scene whose bars are held by contact alone through rows that
-    repeat a constraint (zero gaps closing a loop: random_scene seed 404007, floating 0.5),
-    where the chain's active set meets a singular set and Lemke's handover needs K⁻¹: the
-    scene solved as its problem, whose set solves take a K that contact holds, handed back as
-    the chain's Solution (its dofs are the scene's nodes, its rows the chain's), for the
-    chain's own check to judge."""
-    found = solve_problem(problem_from_scene(scene), "lagrange", "inequality", "auto", {})
-    return Solution(model.free_part(found.u), found.contact_force, solver="lagrange",
-                    iterations=found.iterations, status=found.status,
-                    claimed_success=found.claimed_success,
-                    info={**found.info, "route": "the scene as its problem (the chain's "
-                                                 "active set met a singular set)"})
 
 
 def solve_problem(problem: Problem, method: Any, contact: Any, formulation: Any,

@@ -39,6 +39,7 @@ from contactqp.model import (
     elongation_rows,
 )
 from contactqp.model.augmented import STEPS
+from contactqp.model.chain.to_problem import problem_from_scene
 from contactqp.model.factor import CholmodK
 from contactqp.model.saddle import (  # noqa: F401 - banded_order, row_scale: their former place
     banded_order,
@@ -46,6 +47,7 @@ from contactqp.model.saddle import (  # noqa: F401 - banded_order, row_scale: th
     saddle_point_system,
     solve_saddle_point,
 )
+from contactqp.model.sparse import problem_model
 
 
 def solve_strain_saddle_point(model: Model, active: np.ndarray) -> tuple[np.ndarray, np.ndarray,
@@ -192,6 +194,14 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
         if not lemke_fits:
             raise
         reason = str(cycle)
+    except SolverError:  # a singular set: bars held by contact alone through rows that
+        # repeat a constraint, where Lemke's handover needs K⁻¹
+        if not (model.floating and formulation == "full"):
+            raise
+        u, lam, iterations = _as_its_problem(model, contact, max_iterations)
+        return Solution(u, lam, solver="lagrange", iterations=iterations,
+                        info={"active_set": f"{loop}, then the scene as its problem (the "
+                                            "chain's loop met a singular set)"})
     if reason is not None and lemke_fits:
         # Lemke's method on the same contact problem: finite, and it cannot cycle
         u, lam, iterations = _by_lemke(model)
@@ -212,6 +222,18 @@ def _by_lemke(model: Model | Condensed) -> tuple[np.ndarray, np.ndarray, int]:
     rows taken out)."""
     solution = solve_lemke(model, "inequality")
     return solution.u_free, solution.contact_force, solution.iterations
+
+
+def _as_its_problem(model: Model, contact: str, max_iterations: int | None
+                    ) -> tuple[np.ndarray, np.ndarray, int]:
+    """(u, λ, steps) of a chain whose bars contact alone holds through rows that repeat a
+    constraint (zero gaps closing a loop: random_scene seed 404007, floating 0.5): the scene
+    as its problem, whose set solves take a K that contact holds, u read back at the chain's
+    free nodes (the problem's dofs are the scene's nodes, its rows the chain's)."""
+    general = problem_model(problem_from_scene(model.layout.scene))
+    found = solve_lagrange(general, contact, max_iterations=max_iterations)
+    return (model.free_part(general.full_displacements(found.u_free)), found.contact_force,
+            found.iterations)
 
 
 def _strain_info(element_force: list[np.ndarray]) -> dict:
