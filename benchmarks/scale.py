@@ -29,8 +29,9 @@ with its reason).
 
 The floor of each mesh: the fastest factor-and-solve of K on the free dofs available here,
 measured in the same run: SuperLU with COLAMD, SuperLU with minimum degree in symmetric mode,
-qdldl's LDLᵀ (with AMD) and CHOLMOD through cvxopt, where installed. Every time is also a
-ratio to it.
+qdldl's LDLᵀ (with AMD), and where installed CHOLMOD through cvxopt or cholespy and PARDISO
+through pypardiso (benchmarks/factorisations.py compares them). Every time is also a ratio to
+it.
 
 Built problems are kept in the cache folder (default DIR/problems) as .npz, so a second run
 does not mesh again. Writes scale.json, table.md, time_vs_dofs.png and time_vs_rows.png to DIR
@@ -140,8 +141,9 @@ def free_dofs(problem: contactqp.Problem) -> np.ndarray:
 def floors(problem: contactqp.Problem, repeats: int, limit: float) -> dict[str, float]:
     """Each factor-and-solve of K on the free dofs available here (seconds, the median of
     ``repeats``): SuperLU with COLAMD, SuperLU with minimum degree in symmetric mode (as
-    benchmarks/hertz.py), qdldl's LDLᵀ with AMD (its upper triangle) and CHOLMOD through
-    cvxopt where installed; one not done within ``limit`` s is left out."""
+    benchmarks/hertz.py), qdldl's LDLᵀ with AMD (its upper triangle), and where installed
+    CHOLMOD through cvxopt or cholespy and PARDISO through pypardiso; one not done within
+    ``limit`` s is left out."""
     free = free_dofs(problem)
     K = sp.csc_matrix(sp.csr_array(problem.K)[free][:, free])
     rhs = np.ones(free.size)
@@ -163,6 +165,18 @@ def floors(problem: contactqp.Problem, repeats: int, limit: float) -> dict[str, 
         lower = sp.tril(K, format="coo")
         held = spmatrix(lower.data, lower.row.tolist(), lower.col.tolist(), K.shape)
         candidates["CHOLMOD (cvxopt)"] = lambda: cholmod_solve(cholmod, held, matrix(rhs))
+    except ImportError:
+        pass
+    try:  # CHOLMOD as cholespy builds it (benchmarks/factorisations.py)
+        import cholespy
+
+        candidates["CHOLMOD (cholespy)"] = lambda: cholespy_solve(cholespy, K, rhs)
+    except ImportError:
+        pass
+    try:  # PARDISO (MKL) through pypardiso, symmetric positive definite
+        import pypardiso
+
+        candidates["PARDISO (pypardiso)"] = lambda: pardiso_solve(pypardiso, K, rhs)
     except ImportError:
         pass
     found = {}
@@ -191,6 +205,28 @@ def cholmod_solve(cholmod: Any, K: Any, rhs: Any) -> None:
     factor = cholmod.symbolic(K)
     cholmod.numeric(K, factor)
     cholmod.solve(factor, rhs)
+
+
+def cholespy_solve(cholespy: Any, K: sp.csc_matrix, rhs: np.ndarray) -> np.ndarray:
+    """cholespy's CHOLMOD factor of K (its lower triangle) and one solve."""
+    lower = sp.csc_matrix(sp.tril(K))
+    lower.sort_indices()
+    factor = cholespy.CholeskySolverD(K.shape[0], lower.indptr.astype(np.int32),
+                                      lower.indices.astype(np.int32), lower.data,
+                                      cholespy.MatrixType.CSC)
+    x = np.zeros_like(rhs)
+    factor.solve(np.ascontiguousarray(rhs), x)
+    return x
+
+
+def pardiso_solve(pypardiso: Any, K: sp.csc_matrix, rhs: np.ndarray) -> np.ndarray:
+    """PARDISO's LDLᵀ of K (matrix type 2, real symmetric positive definite: its upper
+    triangle, CSR) and one solve."""
+    upper = sp.triu(K, format="csr")
+    upper.sort_indices()
+    solver = pypardiso.PyPardisoSolver(mtype=2)
+    solver.factorize(upper)
+    return solver.solve(upper, rhs)
 
 
 def reduced_qp(problem: contactqp.Problem) -> tuple[Any, ...]:

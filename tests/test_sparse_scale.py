@@ -276,3 +276,76 @@ def test_each_rows_own_stiffness_is_solved_once(monkeypatch):
     assert np.abs(model.seen_stiffness(rows) - seen).max() == 0.0
     assert columns == [3, 2]
 
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_many_columns_by_cholespys_block_solves_equal_the_dense_inverse(seed, monkeypatch):
+    """A job of solved columns (W of many rows, the check's rows) that pays for it goes to a
+    second factor of K that cholespy makes once and solves a block of columns at a time
+    (cvxopt's CHOLMOD solves column by column): W and the rows' own stiffness still equal the
+    dense inverse's (LAPACK) to 1e-12. It pays where the columns, at BLOCK_SAVING of a
+    CHOLMOD solve's column each, outweigh BLOCK_FACTOR of CHOLMOD's factorisation (both
+    timed; set here): a job of 2 columns does not, one of 6 does, and the factor is then
+    kept. Without cholespy the same job is the column-by-column solves, to the same
+    numbers."""
+    pytest.importorskip("cholespy")
+    from contactqp.model import sparse as sparse_module
+
+    model, W = rows_on_a_spring_chain(np.random.default_rng(100 + seed))
+    monkeypatch.setattr(sparse_module, "SOLVE_BLOCK", 3 * model.n_free)  # 3 columns a block
+    factor = model.factor
+    assert factor.blocks is None and factor.factor_seconds > 0.0
+    factor.solve(np.ones(model.n_free))
+    assert factor.column_seconds > 0.0
+    # a column takes 1 s; 3 columns' saving make up one factorisation, 4 pay for it
+    factor.column_seconds = 1.0
+    factor.factor_seconds = 3 * factor_module.BLOCK_SAVING / factor_module.BLOCK_FACTOR
+    assert not factor.blocks_pay(3) and factor.blocks_pay(4)
+    asked, rule = [], factor.blocks_pay
+
+    def ask(columns: int) -> bool:  # the rule, with the columns left of each job recorded
+        factor.column_seconds = 1.0
+        asked.append(columns)
+        return rule(columns)
+
+    monkeypatch.setattr(factor, "blocks_pay", ask)
+    few = model.flexibility(np.array([2, 5]))
+    assert factor.blocks is None
+    assert np.abs(few - W[np.ix_([2, 5], [2, 5])]).max() <= 1e-12 * np.abs(W).max()
+    rows = np.array([9, 0, 3, 7, 1, 6])
+    formed = model.flexibility(rows)
+    made = factor.blocks
+    assert made is not None
+    assert np.abs(formed - W[np.ix_(rows, rows)]).max() <= 1e-12 * np.abs(W).max()
+    others = np.array([8, 4, 2, 5, 0])  # 4 and 8 not seen yet: the check solves only those
+    seen = model.seen_stiffness(others)
+    assert np.abs(seen * np.diagonal(W)[others] - 1.0).max() <= 1e-12
+    assert np.abs(model.flexibility(np.arange(10)) - W).max() <= 1e-12 * np.abs(W).max()
+    assert factor.blocks is made  # one factorisation by cholespy, kept
+    assert asked == [2, 6, 3, 2, 10, 7, 4, 1]  # each block asks with the columns left
+
+    monkeypatch.setattr(factor_module, "cholespy_installed", lambda: False)
+    plain, _ = rows_on_a_spring_chain(np.random.default_rng(100 + seed))
+    plain.factor.factor_seconds = 0.0  # it would pay at once, but is not installed
+    assert np.abs(plain.flexibility(rows) - formed).max() <= 1e-12 * np.abs(W).max()
+    assert plain.factor.blocks is None
+
+
+def test_a_k_cholespy_refuses_leaves_the_solves_to_cholmod_and_prints_nothing(capfd):
+    """Where cholespy refuses K (not positive definite to its own pivots: here its values
+    negated, which only cholespy reads, after CHOLMOD's factor was made), the job goes on by
+    CHOLMOD's column solves to the dense inverse's W (1e-12), cholespy is not asked again, and
+    CHOLMOD's warning from C does not reach standard output or error."""
+    pytest.importorskip("cholespy")
+    model, W = rows_on_a_spring_chain(np.random.default_rng(7))
+    factor = model.factor
+    factor.values = -factor.values  # what cholespy would factor; CHOLMOD holds K already
+    factor.column_seconds, factor.factor_seconds = 1.0, 0.0  # any job pays
+    assert factor.blocks_pay(2)
+    formed = model.flexibility(np.arange(10))
+    assert factor.blocks is False and not factor.blocks_pay(10**6)
+    assert np.abs(formed - W).max() <= 1e-12 * np.abs(W).max()
+    assert np.abs(model.flexibility(np.array([3, 1])) - W[np.ix_([3, 1], [3, 1])]).max() \
+        <= 1e-12 * np.abs(W).max()
+    printed = capfd.readouterr()
+    assert printed.out == "" and printed.err == ""

@@ -11,7 +11,19 @@ rows held is one numeric factorisation of K + C_Aᵀ R C_A, whose pattern is fix
 once the pattern of K + Cᵀ C, every row's (:class:`Cholmod`). One analysis holds one factor at
 a time; the factor says which matrix it holds and factors K again when K⁻¹ is asked after a
 set's matrix (:class:`CholmodK`). The flexibility W = C K⁻¹ Cᵀ (the complementarity
-methods) is then solved with K's factor, a block of rows at a time.
+methods) is then solved with K's factor, a block of rows at a time. cvxopt's CHOLMOD solves
+those columns one by one; where cholespy (CHOLMOD again, the extra ``contactqp[cholmod]``) is
+installed, a job of columns that pays for it goes to a second factor of K that it makes once
+and solves a block at a time (:meth:`CholmodK.solve_many`).
+
+The candidates measured on the Hertz models' K (benchmarks/factorisations.py; the table on
+docs/benchmarks.md): SuperLU (COLAMD and minimum degree), qdldl, CHOLMOD through cvxopt,
+kvxopt and cholespy, and PARDISO through pypardiso (MKL, 1.8 GB). CHOLMOD through cvxopt (or
+kvxopt, the same library) factors and solves fastest on the four smaller meshes, PARDISO (both
+cores) on the two largest, with 1.2 to 3.2 times the memory; cholespy's block solves are 2.0 to
+2.7 times faster a column, its factorisation 2.4 to 6.9 times slower (its wheel ships the
+reference BLAS). MUMPS (python-mumps 0.0.2) does not import with numpy 2, and scikit-sparse
+has no wheel.
 
 SuperLU (:func:`factorise`) runs with the minimum-degree ordering of Kᵀ + K and no pivoting off
 the diagonal (K is symmetric positive definite): on a 2D grid of 8.4·10⁴ dofs it fills in less
@@ -24,6 +36,7 @@ computed (:class:`ColumnCache`), from SuperLU's Uᵀ.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -37,6 +50,9 @@ ORDERING = "MMD_AT_PLUS_A"  # SuperLU's fill-reducing ordering for symmetric K
 DENSE_REACH = 4000  # the forward solves go dense up to this many rows of L reached
 SMALLEST_PIVOT = 1e-10  # a CHOLMOD pivot below this of K's largest diagonal entry: SuperLU
 FILL = 4.0  # rows whose CᵀC has more than this times K's entries: no fixed pattern is kept
+BLOCK_SAVING = 0.5  # of a CHOLMOD solve's column that cholespy's block solves save (measured
+# 0.50-0.63 on the Hertz models, 3·10⁴ to 9·10⁵ dofs: benchmarks/factorisations.py) ...
+BLOCK_FACTOR = 7.0  # ... against its factorisation, in CHOLMOD's (measured 2.4-6.9 times)
 
 
 def factorise(K: sp.spmatrix, ordering: str = ORDERING) -> spla.SuperLU:
@@ -47,6 +63,16 @@ def factorise(K: sp.spmatrix, ordering: str = ORDERING) -> spla.SuperLU:
     options = {"SymmetricMode": True} if ordering == ORDERING else {}
     return spla.splu(sp.csc_matrix(K), permc_spec=ordering,
                      diag_pivot_thresh=0.0 if ordering == ORDERING else 1.0, options=options)
+
+
+def cholespy_installed() -> bool:
+    """Whether cholespy (CHOLMOD with solves of a block of columns; the extra
+    ``contactqp[cholmod]``) can be imported."""
+    try:
+        import cholespy  # noqa: F401
+    except ImportError:
+        return False
+    return True
 
 
 def cholmod_installed() -> bool:
@@ -137,11 +163,18 @@ class Cholmod:
 @dataclass(eq=False)
 class CholmodK:
     """K's factorisation by CHOLMOD, on the analysis the sets' matrices share: ``solve``
-    factors K again where a set's matrix took its place. ``values``: K on the pattern."""
+    factors K again where a set's matrix took its place. ``values``: K on the pattern.
+    ``solve_many``: a job of many columns, by a second factor of K that cholespy makes where
+    it is installed and pays for itself (``blocks``); ``factor_seconds`` and
+    ``column_seconds`` (K's analysis and factorisation, a column of a solve: timed) say when.
+    """
 
     engine: Cholmod
     values: np.ndarray
     factorisations: int = 1
+    factor_seconds: float = 0.0
+    column_seconds: float | None = None  # a column of CHOLMOD's last solve with K
+    blocks: Any = None  # cholespy's factor of K, once made (False where it refused K)
 
     def held(self) -> Cholmod:
         if self.engine.holds != "K":
@@ -150,7 +183,51 @@ class CholmodK:
         return self.engine
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
-        return self.held().solve(rhs)
+        engine = self.held()
+        start = time.perf_counter()
+        x = engine.solve(rhs)
+        self.column_seconds = (time.perf_counter() - start) / max(1, x.size // self.engine.n)
+        return x
+
+    def blocks_pay(self, columns: int) -> bool:
+        """Whether a job of ``columns`` solves pays for cholespy's factor of K: each column
+        BLOCK_SAVING of a CHOLMOD solve saved against BLOCK_FACTOR CHOLMOD factorisations
+        (made already, or cholespy not installed: whether it is made)."""
+        if self.blocks is not None:
+            return self.blocks is not False
+        if self.column_seconds is None or not cholespy_installed():
+            return False
+        return columns * BLOCK_SAVING * self.column_seconds > BLOCK_FACTOR * self.factor_seconds
+
+    def solve_many(self, rhs: np.ndarray) -> np.ndarray:
+        """K⁻¹ rhs for n x k ``rhs``, one block of a job that :meth:`blocks_pay` for:
+        cvxopt's CHOLMOD solves column by column, cholespy's a block at once, 2.0 to 2.7 times
+        faster a column on the Hertz models (benchmarks/factorisations.py), for a second
+        factorisation of K, 2.4 to 6.9 times cvxopt's (its wheel ships the reference BLAS);
+        :meth:`solve` where cholespy is not installed (the extra ``cholmod``)."""
+        rhs = np.asarray(rhs, dtype=float)
+        if rhs.ndim != 2 or not cholespy_installed() or self.blocks is False:
+            return self.solve(rhs)
+        if self.blocks is None:
+            import cholespy
+
+            from contactqp.progress import silenced
+
+            rows, columns = self.engine.rows, self.engine.columns  # K's lower triangle, CSC
+            pointers = np.searchsorted(columns, np.arange(self.engine.n + 1))
+            try:
+                with silenced():  # CHOLMOD's own warning where it refuses K, from C
+                    self.blocks = cholespy.CholeskySolverD(
+                        self.engine.n, pointers.astype(np.int32), rows.astype(np.int32),
+                        np.ascontiguousarray(self.values, dtype=float),
+                        cholespy.MatrixType.CSC)
+            except (ValueError, RuntimeError):  # not positive definite to its pivots
+                self.blocks = False
+                return self.solve(rhs)
+        b = np.ascontiguousarray(rhs)
+        x = np.zeros_like(b)
+        self.blocks.solve(b, x)
+        return x
 
 
 def cholmod_of(K: sp.csc_matrix, C: sp.csr_array) -> CholmodK | None:
@@ -161,6 +238,7 @@ def cholmod_of(K: sp.csc_matrix, C: sp.csr_array) -> CholmodK | None:
     entry, then say which; CHOLMOD's post-ordering keeps its pivots' dofs to itself)."""
     if not cholmod_installed() or K.shape[0] == 0:
         return None
+    start = time.perf_counter()
     rows, columns, data = lower_triangle(K)
     if (np.diff(C.indptr).max(initial=0) <= 1
             and np.count_nonzero(rows == columns) == K.shape[0]):
@@ -184,7 +262,7 @@ def cholmod_of(K: sp.csc_matrix, C: sp.csr_array) -> CholmodK | None:
         return None
     if not engine.pivots().min(initial=np.inf) > SMALLEST_PIVOT * K.diagonal().max():
         return None
-    return CholmodK(engine, values)
+    return CholmodK(engine, values, factor_seconds=time.perf_counter() - start)
 
 
 @dataclass(eq=False)

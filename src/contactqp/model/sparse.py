@@ -125,12 +125,15 @@ class SparseModel(ContactModel):
 
     def _solved_columns(self, C_rows: sp.csr_array):
         """(the rows' slice, their C, K⁻¹ of their columns) a block of rows at a time, each
-        block at most SOLVE_BLOCK entries of K⁻¹C_blockᵀ (CHOLMOD's factor)."""
+        block at most SOLVE_BLOCK entries of K⁻¹C_blockᵀ (CHOLMOD's factor; cholespy's where
+        the columns left pay for it: :meth:`CholmodK.blocks_pay`)."""
         block = max(1, SOLVE_BLOCK // max(self.n_free, 1))
         for start in range(0, C_rows.shape[0], block):
             where = slice(start, start + block)
             C_block = C_rows[where]
-            yield where, C_block, self.factor.solve(C_block.T.toarray())
+            solve = (self.factor.solve_many if self.factor.blocks_pay(C_rows.shape[0] - start)
+                     else self.factor.solve)
+            yield where, C_block, solve(C_block.T.toarray())
 
     @property
     def flexibility_in_blocks(self) -> bool:
