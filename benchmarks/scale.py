@@ -54,7 +54,6 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 import contactqp
 from cases import in_child, machine
@@ -68,6 +67,10 @@ ZONE, APPROACH = 0.5, 0.01  # mm: the contact zone's (half-)width, δ
 METHODS = ("lagrange", "semismooth_newton", "pgs", "penalty", "augmented", "qp")
 SHORT = {"semismooth_newton": "ssn"}  # the table's column names
 PEERS = ("clarabel", "osqp", "piqp")
+FLOOR_CANDIDATES = {  # benchmarks/factorisations.py's names: the floor's
+    "superlu_colamd": "SuperLU COLAMD", "superlu_mmd": "SuperLU MMD symmetric",
+    "qdldl": "qdldl LDLT", "cvxopt": "CHOLMOD (cvxopt)", "cholespy": "CHOLMOD (cholespy)",
+    "pardiso": "PARDISO (pypardiso)"}
 
 
 @dataclass(frozen=True)
@@ -144,46 +147,24 @@ def floors(problem: contactqp.Problem, repeats: int, limit: float) -> dict[str, 
     benchmarks/hertz.py), qdldl's LDLᵀ with AMD (its upper triangle), and where installed
     CHOLMOD through cvxopt or cholespy and PARDISO through pypardiso; one not done within
     ``limit`` s is left out."""
+    from factorisations import factor_and_solve  # its candidates (it imports this module)
+
     free = free_dofs(problem)
     K = sp.csc_matrix(sp.csr_array(problem.K)[free][:, free])
+    K.sort_indices()
     rhs = np.ones(free.size)
-    candidates = {
-        "SuperLU COLAMD": lambda: spla.splu(K).solve(rhs),
-        "SuperLU MMD symmetric": lambda: spla.splu(
-            K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-            options={"SymmetricMode": True}).solve(rhs)}
-    try:
-        import qdldl
-
-        upper = sp.triu(K, format="csc")
-        candidates["qdldl LDLT"] = lambda: qdldl.Solver(upper, upper=True).solve(rhs)
-    except ImportError:
-        pass
-    try:
-        from cvxopt import cholmod, matrix, spmatrix
-
-        lower = sp.tril(K, format="coo")
-        held = spmatrix(lower.data, lower.row.tolist(), lower.col.tolist(), K.shape)
-        candidates["CHOLMOD (cvxopt)"] = lambda: cholmod_solve(cholmod, held, matrix(rhs))
-    except ImportError:
-        pass
-    try:  # CHOLMOD as cholespy builds it (benchmarks/factorisations.py)
-        import cholespy
-
-        candidates["CHOLMOD (cholespy)"] = lambda: cholespy_solve(cholespy, K, rhs)
-    except ImportError:
-        pass
-    try:  # PARDISO (MKL) through pypardiso, symmetric positive definite
-        import pypardiso
-
-        candidates["PARDISO (pypardiso)"] = lambda: pardiso_solve(pypardiso, K, rhs)
-    except ImportError:
-        pass
+    candidates = {}
+    for name, label in FLOOR_CANDIDATES.items():
+        try:
+            factor, solve = factor_and_solve(name, K)
+        except ImportError:  # not installed here
+            continue
+        candidates[label] = (lambda factor=factor, solve=solve: solve(factor(), rhs))
     found = {}
-    for name, factor_and_solve in candidates.items():
+    for name, job in candidates.items():
         # each in a child stopped after the run's time limit: SuperLU at 9·10⁵ dofs takes
         # many minutes and gigabytes, and a floor past the limit is no floor
-        seconds = in_child(limit, timed, factor_and_solve, repeats)
+        seconds = in_child(limit, timed, job, repeats)
         if seconds is not None:
             found[name] = seconds
     return found
@@ -197,36 +178,6 @@ def timed(function: Any, repeats: int) -> float:
         function()
         times.append(time.perf_counter() - start)
     return statistics.median(times)
-
-
-def cholmod_solve(cholmod: Any, K: Any, rhs: Any) -> None:
-    """CHOLMOD's supernodal Cholesky of K (its lower triangle, AMD or METIS as CHOLMOD
-    chooses) and one solve."""
-    factor = cholmod.symbolic(K)
-    cholmod.numeric(K, factor)
-    cholmod.solve(factor, rhs)
-
-
-def cholespy_solve(cholespy: Any, K: sp.csc_matrix, rhs: np.ndarray) -> np.ndarray:
-    """cholespy's CHOLMOD factor of K (its lower triangle) and one solve."""
-    lower = sp.csc_matrix(sp.tril(K))
-    lower.sort_indices()
-    factor = cholespy.CholeskySolverD(K.shape[0], lower.indptr.astype(np.int32),
-                                      lower.indices.astype(np.int32), lower.data,
-                                      cholespy.MatrixType.CSC)
-    x = np.zeros_like(rhs)
-    factor.solve(np.ascontiguousarray(rhs), x)
-    return x
-
-
-def pardiso_solve(pypardiso: Any, K: sp.csc_matrix, rhs: np.ndarray) -> np.ndarray:
-    """PARDISO's LDLᵀ of K (matrix type 2, real symmetric positive definite: its upper
-    triangle, CSR) and one solve."""
-    upper = sp.triu(K, format="csr")
-    upper.sort_indices()
-    solver = pypardiso.PyPardisoSolver(mtype=2)
-    solver.factorize(upper)
-    return solver.solve(upper, rhs)
 
 
 def reduced_qp(problem: contactqp.Problem) -> tuple[Any, ...]:
