@@ -30,7 +30,7 @@ with its reason).
 The floor of each mesh: the fastest factor-and-solve of K on the free dofs available here,
 measured in the same run: SuperLU with COLAMD, SuperLU with minimum degree in symmetric mode,
 qdldl's LDLᵀ (with AMD), and where installed CHOLMOD through cvxopt or cholespy and PARDISO
-through pypardiso (benchmarks/factorisations.py compares them). Every time is also a ratio to
+through pypardiso (benchmarks/candidates.py; benchmarks/factorisations.py compares them). Every time is also a ratio to
 it.
 
 Built problems are kept in the cache folder (default DIR/problems) as .npz, so a second run
@@ -56,6 +56,7 @@ import numpy as np
 import scipy.sparse as sp
 
 import contactqp
+from candidates import factor_and_solve
 from cases import in_child, machine
 
 TIMEOUT = {False: 60.0, True: 10.0}  # s per run (full, --quick)
@@ -67,7 +68,7 @@ ZONE, APPROACH = 0.5, 0.01  # mm: the contact zone's (half-)width, δ
 METHODS = ("lagrange", "semismooth_newton", "pgs", "penalty", "augmented", "qp")
 SHORT = {"semismooth_newton": "ssn"}  # the table's column names
 PEERS = ("clarabel", "osqp", "piqp")
-FLOOR_CANDIDATES = {  # benchmarks/factorisations.py's names: the floor's
+FLOOR_CANDIDATES = {  # benchmarks/candidates.py's names: the floor's
     "superlu_colamd": "SuperLU COLAMD", "superlu_mmd": "SuperLU MMD symmetric",
     "qdldl": "qdldl LDLT", "cvxopt": "CHOLMOD (cvxopt)", "cholespy": "CHOLMOD (cholespy)",
     "pardiso": "PARDISO (pypardiso)"}
@@ -147,8 +148,6 @@ def floors(problem: contactqp.Problem, repeats: int, limit: float) -> dict[str, 
     benchmarks/hertz.py), qdldl's LDLᵀ with AMD (its upper triangle), and where installed
     CHOLMOD through cvxopt or cholespy and PARDISO through pypardiso; one not done within
     ``limit`` s is left out."""
-    from factorisations import factor_and_solve  # its candidates (it imports this module)
-
     free = free_dofs(problem)
     K = sp.csc_matrix(sp.csr_array(problem.K)[free][:, free])
     K.sort_indices()
