@@ -254,20 +254,46 @@ def next_set(model, active: np.ndarray, u: np.ndarray, lam: np.ndarray,
 def first_guess(model) -> np.ndarray:
     """The rows passed after one steepest-descent step from u₀ = K⁻¹P towards closing its
     penetrations p, each row weighted by its stiffness s̄ (the forces λ₀ = μ S p of the force
-    scale, :func:`contactqp.model.base.first_step_forces`; one solve with K), or where that
-    step opens every row, the rows u₀ passes. Measured on the Hertz cylinder at 2·10⁴ dofs:
-    u₀ passes 59 rows, the step 27, the answer's 27."""
+    scale, :func:`contactqp.model.base.first_step_forces`; one solve with K), and the rows
+    passed after a second step of the same kind on the forces (projected onto λ >= 0; one
+    solve, two where the projection cuts): the union of both. Where the first step opens
+    every row, the rows u₀ passes.
+
+    After one step what is left of the penetration is nearly flat over the contact, so the
+    rows it leaves passed turn on a knife edge of the step: on the 2D Hertz cylinder it holds
+    the answer's set to a few rows (u₀ passes 59 rows at 8 754 dofs, the step 27, the
+    answer's 27), on the 3D sphere a third too few (138 of 203 at 32 550 dofs), and the
+    second step, which passes fewer in 2D and more in 3D, finds the rest (207 of them, 4 too
+    many): lagrange's set factorisations there fell from 4 to 1 (2.55 to 1.52 s), and on
+    every 2D mesh of the scaling benchmark the set is the one step's (docs/benchmarks.md,
+    "A first set from a second step")."""
     model.force_scale  # noqa: B018 - its first step's solve is kept: the one taken here
+    C, g, stiffness = model.C, model.g, model.row_stiffness
     u0 = model.free_displacement
-    passed = model.C @ u0 - model.g
-    weighted = np.where(passed > 0.0, model.row_stiffness * passed, 0.0)
+    passed = C @ u0 - g
+    weighted = np.where(passed > 0.0, stiffness * passed, 0.0)
     if not np.any(weighted):
         return passed > 0.0
-    push = model.C.T @ weighted
+    push = C.T @ weighted
     moved = model.pseudo_solve(push)  # the force scale's solve, kept
     step = float(passed @ weighted) / float(push @ moved)
-    after = model.C @ (u0 - step * moved) - model.g > 0.0
-    return after if after.any() else passed > 0.0
+    u1 = u0 - step * moved
+    left = C @ u1 - g
+    after = left > 0.0
+    if not after.any():
+        return passed > 0.0
+    forces = step * weighted  # the second step: steepest descent on the forces, projected
+    direction = np.where((forces > 0.0) | after, stiffness * left, 0.0)
+    moved = model.pseudo_solve(C.T @ direction)
+    curvature = float(direction @ (C @ moved))
+    if not curvature > 0.0:
+        return after
+    trial = forces + float(left @ direction) / curvature * direction
+    if np.all(trial >= 0.0):
+        u2 = u1 - float(left @ direction) / curvature * moved
+    else:
+        u2 = u0 - model.pseudo_solve(C.T @ np.maximum(trial, 0.0))
+    return after | (C @ u2 - g > 0.0)
 
 
 def released_ahead(following: np.ndarray, count: int, lam: np.ndarray,
