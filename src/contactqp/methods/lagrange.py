@@ -288,9 +288,10 @@ def first_guess(model) -> np.ndarray:
     curvature = float(direction @ (C @ moved))
     if not curvature > 0.0:
         return after
-    trial = forces + float(left @ direction) / curvature * direction
+    length = float(left @ direction) / curvature  # the exact line search's
+    trial = forces + length * direction
     if np.all(trial >= 0.0):
-        u2 = u1 - float(left @ direction) / curvature * moved
+        u2 = u1 - length * moved
     else:
         u2 = u0 - model.pseudo_solve(C.T @ np.maximum(trial, 0.0))
     return after | (C @ u2 - g > 0.0)
