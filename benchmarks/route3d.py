@@ -1,7 +1,7 @@
 """The Hertz sphere at 10⁶ dofs: what a direct factorisation and an iterative solve of K cost
 on this machine (issue 39's 3D goal; the measurements on docs/benchmarks.md, "3D at 10⁶ dofs").
 
-    python benchmarks/route3d.py [--level 6.5] [--cholmod] [--set-solve]
+    python benchmarks/route3d.py [--level 6.5] [--cholmod] [--set-solve] [--solve]
 
 Builds the sphere of benchmarks/hertz3d.py's level k (``sphere_on_flat``, δ = 10 µm; level
 6.5 has 1.1·10⁶ dofs, and building it takes about 4 minutes and 14 GB), then times on K on the
@@ -20,7 +20,12 @@ free dofs:
   that dof), preconditioned once by K's own hierarchy restricted to those dofs and once by a
   hierarchy of K_FF made for the set; iterations, time, and the distance to lagrange's
   answer over U. It runs lagrange
-  first (CHOLMOD or SuperLU), so it is for the levels a direct factorisation fits.
+  first (CHOLMOD or SuperLU), so it is for the levels a direct factorisation fits;
+- with --solve (and pyamg), the route built: ``contactqp.solve(problem, "lagrange",
+  engine="amg")`` with its check (contactqp.model.iterative): the build of the model (the
+  hierarchy), the solve and the check, the conjugate-gradient iterations of each solve, the
+  verdict and its bounds, a and p₀ against Hertz's, and the peak memory. Alone (without the
+  other options) it times nothing else.
 
 Prints one line per step as it is measured, and the peak memory of the process.
 """
@@ -66,6 +71,8 @@ def main() -> None:
     parser.add_argument("--cholmod", action="store_true", help="also factor K by CHOLMOD")
     parser.add_argument("--set-solve", action="store_true",
                         help="also the set solve by conjugate gradients (needs pyamg)")
+    parser.add_argument("--solve", action="store_true",
+                        help="solve with lagrange and engine='amg', checked (needs pyamg)")
     args = parser.parse_args()
     fine, growth = level_sizes(args.level)
     start = time.perf_counter()
@@ -73,6 +80,10 @@ def main() -> None:
     problem = model.problem
     print(f"level {args.level:g}: {problem.n} dofs, {problem.m} rows; built in "
           f"{time.perf_counter() - start:.1f} s, peak {peak_gb():.1f} GB", flush=True)
+    if args.solve:
+        solve_by_amg(model)
+        if not (args.cholmod or args.set_solve):
+            return
     free = np.setdiff1d(np.arange(problem.n), problem.prescribed)
     whole = sp.csr_array(problem.K)
     K = sp.csr_matrix(whole[free][:, free])
@@ -119,6 +130,31 @@ def main() -> None:
         start = time.perf_counter()
         cholmod.solve(factor, rhs)
         print(f"CHOLMOD solve: {time.perf_counter() - start:.1f} s", flush=True)
+
+
+def solve_by_amg(model: Any) -> None:
+    """lagrange with engine="amg" and its check on the sphere (module docstring)."""
+    from contactqp.fem import measure_sphere
+    from contactqp.model.sparse import problem_model
+
+    start = time.perf_counter()
+    result = contactqp.solve(model.problem, "lagrange", engine="amg")
+    seconds = time.perf_counter() - start
+    timings = ", ".join(f"{k} {v:.1f} s" for k, v in result.timings.items())
+    engine = problem_model(model.problem, "amg").factor
+    print(f"lagrange, engine='amg': {seconds:.1f} s ({timings}; the hierarchy's set-up "
+          f"{engine.setup_seconds:.1f} s), verified {result.verified}, force bound "
+          f"{result.force_error_bound:.1e}, displacement bound "
+          f"{result.displacement_error_bound:.1e}, "
+          f"{int(np.count_nonzero(result.contact_force > 0))} rows in contact, "
+          f"peak {peak_gb():.1f} GB", flush=True)
+    print(f"conjugate-gradient iterations per solve: {engine.iterations}", flush=True)
+    hertz = measure_sphere(model, result.contact_force, resolution=result.force_error_bound)
+    a_off = hertz.contact_radius / hertz.hertz_contact_radius - 1.0
+    p0_off = hertz.peak_pressure / hertz.hertz_peak_pressure - 1.0
+    print(f"P = {hertz.load:.6g} N: a {hertz.contact_radius:.5g} against Hertz's "
+          f"{hertz.hertz_contact_radius:.5g} ({a_off:+.2%}), p0 {hertz.peak_pressure:.5g} "
+          f"against {hertz.hertz_peak_pressure:.5g} ({p0_off:+.2%})", flush=True)
 
 
 def set_solves(problem: contactqp.Problem, free: np.ndarray, K: sp.csr_matrix, f: np.ndarray,

@@ -141,6 +141,10 @@ def _solve_command(scene_command: SceneCommand) -> None:
     solve_parser.add_argument("--solver", help="QP solver of the backend, method qp")
     solve_parser.add_argument("--accuracy", choices=("default", "high"), help="method qp")
     solve_parser.add_argument("--scale", choices=("on", "off"), help="non-dimensionalise the QP")
+    solve_parser.add_argument("--engine", default="direct", choices=("direct", "amg"),
+                              help="a problem file's solves with K: factorised (direct, the "
+                                   "default) or conjugate gradients with pyamg's multigrid "
+                                   "(amg, for models a factorisation does not fit)")
     solve_parser.add_argument("--json", action="store_true", help="print the Result as JSON")
     solve_parser.add_argument("--verbose", action="store_true",
                               help="let the QP solver print its progress")

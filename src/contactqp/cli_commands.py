@@ -132,7 +132,7 @@ def command_solve(args: argparse.Namespace) -> int:
         options["verbose"] = True
     with chatter_to_stderr(args.json):
         result = solve(_scene(args.scene), args.method, args.contact, args.formulation,
-                       **options)
+                       engine=args.engine, **options)
     if args.json:
         print(result.to_json())
     else:

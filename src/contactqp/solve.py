@@ -24,7 +24,7 @@ from contactqp.model import Condensed, Model, condensed_model, scene_model
 from contactqp.model.chain import layout_of
 from contactqp.model.chain.floating import unheld_bars
 from contactqp.model.chain.to_problem import problem_from_scene
-from contactqp.model.sparse import problem_model
+from contactqp.model.sparse import ENGINES, problem_model
 from contactqp.problem import Problem
 from contactqp.problem_files import load_problem
 from contactqp.result import Result, make_result, with_bar_quantities
@@ -67,7 +67,7 @@ AUTO_CONDENSE_NODES = 512  # ... and at least this many free nodes (below, conde
 
 def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str = "lagrange",
           contact: str = "inequality", formulation: str = "auto", previous: Any = None,
-          **options: Any) -> Result:
+          engine: str = "direct", **options: Any) -> Result:
     """Solve a scene (or a user's own model) by one method and return the checked Result.
 
     Parameters
@@ -98,6 +98,12 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
         increment starts from (a Result of the same problem, or its u); the slip is measured
         from its u (:mod:`contactqp.friction.methods` has the methods and options that take
         friction; docs/friction.md). Default: from rest.
+    engine : str
+        How a Problem's model solves with K: "direct" (the default: K factorised once,
+        :mod:`contactqp.model.factor`) or "amg" (conjugate gradients with pyamg's algebraic
+        multigrid, for models whose factorisation does not fit in memory, 3D at 10⁶ dofs:
+        :mod:`contactqp.model.iterative`; the extra ``contactqp[amg]``). The check solves
+        with the same engine. Bar scenes and problems with friction take "direct" only.
     **options
         The method's options (:data:`contactqp.methods.METHODS` names each), in the scene's
         units. "lagrange": ``max_iterations``, ``active_set`` ("hull" or "passed").
@@ -137,6 +143,8 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
     """
     if isinstance(scene, (str, os.PathLike)):
         scene = as_target(scene)
+    if engine != "direct":
+        _check_engine(scene, engine)
     if isinstance(scene, Scene) and scene.beds:  # friction: solved as the scene's problem,
         # with the bar quantities of the scene's own numbering
         found = solve_friction_problem(problem_from_scene(scene), method, contact, formulation,
@@ -148,7 +156,7 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
         raise OptionError("previous applies to problems with friction (the slip is measured "
                           "from it); this one has none")
     if isinstance(scene, Problem):
-        return solve_problem(scene, method, contact, formulation, options)
+        return solve_problem(scene, method, contact, formulation, options, engine)
     scene, spec, options = checked_call(scene, method, contact, formulation, options)
     start = time.perf_counter()
     model = scene_model(scene)  # built once per scene object
@@ -161,8 +169,18 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
                        timings={"build": built - start, "solve": solved - built})
 
 
+def _check_engine(target: Any, engine: Any) -> None:
+    """An OptionError where ``engine`` is not one of ENGINES, or is not "direct" for a bar
+    scene or a problem with friction."""
+    if not isinstance(engine, str) or engine not in ENGINES:
+        raise OptionError(f"engine must be one of {', '.join(ENGINES)}; got {engine!r}")
+    if not isinstance(target, Problem) or target.T is not None:
+        raise OptionError(f"engine={engine!r} applies to a Problem without friction; bar "
+                          "scenes and friction solve with engine='direct'")
+
+
 def solve_problem(problem: Problem, method: Any, contact: Any, formulation: Any,
-                  options: dict[str, Any]) -> Result:
+                  options: dict[str, Any], engine: str = "direct") -> Result:
     """:func:`solve` for a user's problem: its model (built once per Problem,
     :func:`~contactqp.model.sparse.problem_model`), the method's own refusal where it does not
     take it, the solve and its check. A solve with ``contact="equality"`` that fails (a
@@ -174,7 +192,7 @@ def solve_problem(problem: Problem, method: Any, contact: Any, formulation: Any,
         raise OptionError(f"formulation={formulation!r} applies to bar scenes; a Problem "
                           "is solved as given (formulation='auto')")
     start = time.perf_counter()
-    model = problem_model(problem)
+    model = problem_model(problem, engine)
     refusal = spec.accepts(model, contact, options)
     if refusal:
         raise OptionError(refusal)
@@ -189,6 +207,7 @@ def solve_problem(problem: Problem, method: Any, contact: Any, formulation: Any,
             _refuse_rows_that_leave_no_u(problem)
         raise
     solved = time.perf_counter()
+    options = {**options, "engine": engine} if engine != "direct" else options
     result = make_result(model, solution, method=spec.name, contact=contact, options=options,
                          timings={"build": built - start, "solve": solved - built})
     if held and not result.verified:

@@ -41,6 +41,7 @@ from contactqp.model import (
 from contactqp.model.augmented import STEPS
 from contactqp.model.chain.to_problem import problem_from_scene
 from contactqp.model.factor import CholmodK
+from contactqp.model.iterative import AmgK, solve_set
 from contactqp.model.saddle import (  # noqa: F401 - banded_order, row_scale: their former place
     banded_order,
     row_scale,
@@ -143,6 +144,8 @@ def solve_lagrange(model: Model | Condensed, contact: str, *, max_iterations: in
     ``formulation`` "full" (unknowns u) or "strain" (u and the element elongations e, tied by
     equality rows whose multipliers, the element forces, go to the Solution's info)."""
     if model.layout is None:  # no chain: the primal-dual active set on the sparse model
+        if isinstance(model.factor, AmgK):
+            return solve_projected(model, contact, max_iterations=max_iterations)
         if isinstance(model.factor, CholmodK):
             return solve_augmented(model, contact, max_iterations=max_iterations)
         return solve_schur(model, contact, max_iterations=max_iterations)
@@ -398,6 +401,40 @@ def solve_augmented(model, contact: str, *, max_iterations: int | None = None) -
             if steps == STEPS:
                 return solve_schur(model, contact, max_iterations=max_iterations)
             steps = STEPS  # or a set on the way decided by a loose solve: exact from here
+        seen.add(following.tobytes())
+        active = following
+    raise SolverError(f"lagrange: the active-set loop did not settle in {limit} steps")
+
+
+def solve_projected(model, contact: str, *, max_iterations: int | None = None) -> Solution:
+    """Lagrange on a sparse model whose K is solved by conjugate gradients (``engine="amg"``,
+    :mod:`contactqp.model.iterative`): the primal-dual active set from :func:`first_guess`,
+    each set solved by projected conjugate gradients started from the last set's answer (no
+    W_AA: a set costs the same whatever the rows in contact); the set it settles on is
+    refined once with the system's own residuals (a product with K). A set that comes back
+    (rows that repeat a constraint) is a SolverError: this engine has no Schur complement to
+    hand over to."""
+    equality = model.equality | (contact == "equality")
+    active = equality | first_guess(model)
+    limit = default_max_iterations(model.n_contacts) if max_iterations is None else int(
+        max_iterations)
+    seen, u = {active.tobytes()}, model.free_displacement.copy()
+    for iteration in range(1, limit + 1):
+        rows = np.flatnonzero(active)
+        lam = np.zeros(model.n_contacts)
+        u, lam[rows] = solve_set(model, rows, model.P, model.g[rows], start=u)
+        following = next_set(model, active, u, lam, equality)
+        if np.array_equal(following, active):
+            residual = model.K @ u - model.P + model.C.T @ lam
+            du, dlam = model.set_solve(rows, residual, model.C[rows] @ u - model.g[rows])
+            u, lam[rows] = u - du, lam[rows] - dlam
+            return Solution(u, lam, solver="lagrange", iterations=iteration,
+                            info={"active_set": "primal-dual", "engine": "amg",
+                                  "cg_iterations": sum(model.factor.iterations)})
+        if following.tobytes() in seen:
+            raise SolverError("lagrange: the active set came back to a set it left (rows "
+                              "that repeat a constraint?); engine='direct' hands such sets "
+                              "over to the Schur complement")
         seen.add(following.tobytes())
         active = following
     raise SolverError(f"lagrange: the active-set loop did not settle in {limit} steps")

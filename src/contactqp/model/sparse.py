@@ -39,7 +39,7 @@ if TYPE_CHECKING:  # scipy.linalg and scipy.sparse.linalg load at the first solv
     import scipy.sparse.linalg as spla
 
 from contactqp.errors import OptionError, SolverError
-from contactqp.model import schur
+from contactqp.model import iterative, schur
 from contactqp.model.base import (
     ContactModel,
     ScaleTerms,
@@ -58,6 +58,7 @@ from contactqp.model.factor import (
     forward_columns,
     reach,
 )
+from contactqp.model.iterative import AmgK
 from contactqp.model.singular import (
     HELD,
     factor_or_none,
@@ -82,7 +83,8 @@ class SparseModel(ContactModel):
     free : the free dofs (indices into the problem's u).
     K, P, C, g : K_II, f_I − K_ID u_D, C_I and g: the problem in the free dofs.
     factor : K's factorisation, CHOLMOD's (:class:`~contactqp.model.factor.CholmodK`) or
-        SuperLU's (None where K is singular: :attr:`floating`).
+        SuperLU's (None where K is singular: :attr:`floating`), or with ``engine="amg"`` its
+        multigrid hierarchy (:class:`~contactqp.model.iterative.AmgK`).
     floating : the modes K leaves free, which contact rows hold (free dofs x modes, or None).
     """
 
@@ -92,13 +94,19 @@ class SparseModel(ContactModel):
     P: np.ndarray
     C: sp.csr_array
     g: np.ndarray
-    factor: spla.SuperLU | CholmodK | None
+    factor: spla.SuperLU | CholmodK | AmgK | None
     floating: np.ndarray | None = None
     cache: ColumnCache = field(default_factory=ColumnCache)
 
     @property
     def n_free(self) -> int:
         return int(self.P.size)
+
+    @property
+    def engine(self) -> str:
+        """How it solves with K: "amg" (conjugate gradients, :mod:`~contactqp.model.iterative`)
+        or "direct" (a factorisation)."""
+        return "amg" if isinstance(self.factor, AmgK) else "direct"
 
     @property
     def n_contacts(self) -> int:
@@ -116,7 +124,7 @@ class SparseModel(ContactModel):
         rhs = np.asarray(rhs, dtype=float)
         if self.n_free == 0:  # every dof prescribed: nothing to solve
             return rhs.copy()
-        if rhs.ndim == 1 or isinstance(self.factor, CholmodK):
+        if rhs.ndim == 1 or isinstance(self.factor, (CholmodK, AmgK)):
             return self.factor.solve(rhs)
         # one column at a time: SuperLU's multi-column solve costs more than the columns
         # alone (measured at 8.4·10⁴ dofs: 10 columns 150 ms at once, 12 ms each alone)
@@ -138,8 +146,9 @@ class SparseModel(ContactModel):
     @property
     def flexibility_in_blocks(self) -> bool:
         """Whether :meth:`flexibility` solves a block of columns at a time (CHOLMOD's
-        factor); SuperLU's forward columns are kept dense on the dofs they reach."""
-        return isinstance(self.factor, CholmodK)
+        factor, or conjugate gradients'); SuperLU's forward columns are kept dense on the dofs
+        they reach."""
+        return isinstance(self.factor, (CholmodK, AmgK))
 
     def flexibility(self, rows: np.ndarray) -> np.ndarray:
         """W = C_rows K⁻¹ C_rowsᵀ (rows x rows, dense): with CHOLMOD's factor by solves with
@@ -148,7 +157,7 @@ class SparseModel(ContactModel):
         Prᵀ U⁻¹ D U⁻ᵀ Pr and W = Zᵀ D Z with Z = U⁻ᵀ Pr Cᵀ: one sparse forward solve per row
         (:func:`forward_columns`), computed once."""
         cache, rows = self.cache, np.asarray(rows, dtype=np.intp)
-        if isinstance(self.factor, CholmodK):  # K⁻¹C_rowsᵀ by CHOLMOD, a block of rows at a time
+        if self.flexibility_in_blocks:  # K⁻¹C_rowsᵀ by CHOLMOD, a block of rows at a time
             if not rows.size:
                 return np.zeros((0, 0))
             C_rows = self.C[rows]
@@ -207,6 +216,9 @@ class SparseModel(ContactModel):
         rows = np.asarray(rows, dtype=np.intp)
         if self.factor is None:  # no K⁻¹: the saddle-point system (rows that repeat a
             return super().set_solve(rows, force, gap)  # constraint regularised)
+        if isinstance(self.factor, AmgK):  # projected conjugate gradients
+            return iterative.set_solve(self, rows, np.asarray(force, dtype=float),
+                                       np.asarray(gap, dtype=float))
         dlam, du = schur.correction(self, rows, np.asarray(force, dtype=float),
                                     np.asarray(gap, dtype=float))
         return du, dlam
@@ -214,11 +226,15 @@ class SparseModel(ContactModel):
     def redundant(self, rows: np.ndarray) -> bool:
         if self.factor is None:
             return super().redundant(rows)
+        if isinstance(self.factor, AmgK):
+            return iterative.redundant(self, np.asarray(rows, dtype=np.intp))
         return schur.redundant(self, np.asarray(rows, dtype=np.intp))
 
     def on_set(self, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         if self.factor is None:
             return super().on_set(active)
+        if isinstance(self.factor, AmgK):
+            return iterative.on_set(self, active)
         return schur.on_set(self, active)
 
     def seen_stiffness(self, rows: np.ndarray) -> np.ndarray:
@@ -228,7 +244,7 @@ class SparseModel(ContactModel):
         rows = np.asarray(rows, dtype=np.intp)
         if not rows.size:
             return np.zeros(0)
-        if isinstance(self.factor, CholmodK):  # one solve per row: only the rows asked for
+        if self.flexibility_in_blocks:  # one solve per row: only the rows asked for
             # and not solved before (W's diagonal, kept), a block of columns at a time
             # (K⁻¹C_rowsᵀ of 10⁴ rows on 3.3·10⁵ dofs: 25 GiB)
             kept = self._kept_compliance()
@@ -378,18 +394,22 @@ def _gram(Y: np.ndarray, Z: np.ndarray) -> np.ndarray:
     return Y.T @ Z
 
 
-def problem_model(problem: Problem) -> SparseModel:
-    """The model of ``problem``, built once and kept with it: a Problem owns read-only
-    arrays and does not change, so every later solve, check or study of the same problem
-    object reuses the model and what it has worked out (K's factorisation, K⁻¹P, the scales,
-    the columns of W), as :func:`contactqp.model.chain.model.scene_model` does for a scene."""
-    model = problem.__dict__.get(_KEPT_MODEL)
+def problem_model(problem: Problem, engine: str = "direct") -> SparseModel:
+    """The model of ``problem``, built once per engine and kept with it: a Problem owns
+    read-only arrays and does not change, so every later solve, check or study of the same
+    problem object reuses the model and what it has worked out (K's factorisation, K⁻¹P, the
+    scales, the columns of W), as :func:`contactqp.model.chain.model.scene_model` does for a
+    scene. ``engine``: "direct" (K factorised) or "amg" (conjugate gradients with pyamg's
+    multigrid: :mod:`contactqp.model.iterative`)."""
+    key = _KEPT_MODEL if engine == "direct" else f"{_KEPT_MODEL}_{engine}"
+    model = problem.__dict__.get(key)
     if model is None:
-        model = problem.__dict__[_KEPT_MODEL] = build_sparse_model(problem)
+        model = problem.__dict__[key] = build_sparse_model(problem, engine=engine)
     return model
 
 
 _KEPT_MODEL = "_sparse_model"  # where problem_model keeps a problem's model
+ENGINES = ("direct", "amg")  # how a user's model solves with K (problem_model)
 
 
 def as_sparse_model(value: Any) -> SparseModel:
@@ -403,10 +423,15 @@ def as_sparse_model(value: Any) -> SparseModel:
                       f"of one, got {type(value).__name__}")
 
 
-def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseModel:
+def build_sparse_model(problem: Problem, ordering: str = ORDERING, engine: str = "direct"
+                       ) -> SparseModel:
     """Condense the prescribed dofs out and factorise K_II once (module docstring); a
     ProblemError where K is not positive semidefinite (the factorisation's evidence named) or
-    where nothing holds the model along a mode K leaves free."""
+    where nothing holds the model along a mode K leaves free. ``engine="amg"``: K_II's
+    multigrid hierarchy instead of its factorisation (:mod:`contactqp.model.iterative`; K
+    positive definite)."""
+    if engine not in ENGINES:
+        raise OptionError(f"engine must be one of {', '.join(ENGINES)}; got {engine!r}")
     n = problem.n
     held = np.zeros(n, dtype=bool)
     held[problem.prescribed] = True
@@ -415,6 +440,10 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING) -> SparseMode
     K_II = sp.csc_matrix(K[free][:, free])
     P, g = _loads_and_gaps(problem, free)
     C = sp.csr_array(problem.C[:, free])
+    if engine == "amg" and free.size:
+        modes = iterative.rigid_body_modes(problem.coordinates, problem.K)
+        factor = AmgK.of(K_II, None if modes is None else modes[free], P)
+        return SparseModel(problem, free, K_II, P, C, g, factor, None, ColumnCache())
     factor = cholmod_of(K_II, C) if ordering == ORDERING else None
     if factor is not None:  # K positive definite, its pivots far from 0
         return SparseModel(problem, free, K_II, P, C, g, factor, None, ColumnCache())
@@ -441,5 +470,5 @@ def _loads_and_gaps(problem: Problem, free: np.ndarray) -> tuple[np.ndarray, np.
     return P, g
 
 
-__all__ = ["ORDERING", "SparseModel", "build_sparse_model", "diagonal_pivots",
+__all__ = ["ENGINES", "ORDERING", "SparseModel", "build_sparse_model", "diagonal_pivots",
            "elimination_tree", "factorise", "forward_columns", "free_modes", "reach"]

@@ -1,0 +1,306 @@
+"""K solved by conjugate gradients with an algebraic multigrid preconditioner: the engine of a
+sparse model whose factorisation does not fit in memory (``engine="amg"``; pyamg, the optional
+extra ``contactqp[amg]``).
+
+Why. A direct factorisation of K grows faster than K in 3D: on the Hertz sphere at 1.1·10⁶
+dofs CHOLMOD's numeric factorisation did not fit in 24 GB beside the model, where pyamg's
+hierarchy took 37 s to set up and a solve of K 24 iterations, 38 s (docs/benchmarks.md, "3D at
+10⁶ dofs"). Below that size the direct engine is faster (at 9·10⁴ dofs a solve of K by
+conjugate gradients took 2.3–2.7 s, CHOLMOD's factorisation 4.5–5.3 s once, then
+milliseconds a solve), so ``engine="direct"`` stays the default.
+
+The engine (:class:`AmgK`): pyamg's smoothed aggregation of K on the free dofs, with the
+rigid-body modes of the nodes as its near null space where the problem's coordinates give them
+(:func:`rigid_body_modes`), and scipy's conjugate gradients with one V-cycle as the
+preconditioner.
+
+A set of rows held on their gaps (:func:`solve_set`) is solved by projected conjugate
+gradients on the null space of the rows: with Π = I − C_Aᵀ(C_A C_Aᵀ)⁻¹C_A (C_A C_Aᵀ is sparse
+and small, factored once per set by SuperLU: :func:`contactqp.model.saddle.gram_factor`),
+
+    u = u_p + z,   u_p = C_Aᵀ(C_A C_Aᵀ)⁻¹ g_A,   Π K Π z = Π(f − K u_p),
+    λ_A = (C_A C_Aᵀ)⁻¹C_A(f − K u),
+
+the V-cycle projected the same way (Π M Π) as the preconditioner, started from the last set's
+answer. No W_AA is formed, so a set costs the same whatever the rows in contact. Where rows
+repeat each other's constraint (C_A C_Aᵀ singular), an independent subset of them is held and
+the others carry nothing: the answer fixes only Cᵀλ there (:func:`redundant`).
+
+Errors. Each solve stops where its residual is within RTOL of its right-hand side or within
+ABSOLUTE of the loads' (so that a correction of a refinement costs a few iterations); it is
+inexact, and the check measures how much: its reference is refined with residuals computed by
+products with K, and the refinement's tail of corrections is its bound
+(:mod:`contactqp.check.on_set`). A solve that does not reach its tolerance in MAX_ITERATIONS is
+a SolverError.
+
+Definiteness. A factorisation's pivots prove K positive definite or not (Sylvester); this
+engine's evidence is weaker: the coarsest level's Galerkin matrix Pᵀ K P, which is positive
+definite where K is, must factor by Cholesky (an indefinite K is refused where that fails), and
+each solve must converge. An indefinite K whose negative directions the coarsest level misses
+is not proved so here: the direct engine proves it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from contactqp.errors import ProblemError, SolverError, SolverNotAvailable
+
+SparseModel = Any  # the model these functions read (contactqp.model.sparse.SparseModel)
+
+RTOL = 1e-10  # a solve stops where its residual is this much of its right-hand side's ...
+ABSOLUTE = 1e-14  # ... or this much of the loads' (the norm of P), whichever is larger
+MAX_ITERATIONS = 2000  # conjugate-gradient iterations at most per solve
+MAX_COARSE = 500  # unknowns of the coarsest level, at most where the aggregation gets there
+# (solved by a dense Cholesky factor: pyamg's default, a pseudo-inverse by the SVD, took 6.4 s
+# on the 1 908 unknowns of the sphere's coarsest level at 32 550 dofs, Cholesky 0.1 s)
+MODE_RTOL = 1e-8  # a rigid-body mode is kept where |K b| is at most this of |K||b|
+KEPT_SETS = 2  # the sets' factors of C_A C_Aᵀ kept (the loop's last and the check's)
+
+
+def amg_installed() -> bool:
+    """Whether pyamg (the extra ``contactqp[amg]``) imports."""
+    try:
+        import pyamg  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def rigid_body_modes(coordinates: np.ndarray | None, K: sp.csr_array) -> np.ndarray | None:
+    """The rigid-body modes of the nodes (n x 3 in 2D, n x 6 in 3D), or the translations
+    alone, or None: the dofs that sit at one point (a row of ``coordinates``, n x d) are one
+    node's, in the order x, y(, z) of their numbers; each mode is kept only where the whole
+    K moves none of it (|K b| within MODE_RTOL of |K||b|: the order was right and nothing ties
+    the model to the ground), the translations alone where the rotations are not."""
+    if coordinates is None or coordinates.ndim != 2 or coordinates.shape[1] not in (2, 3):
+        return None
+    d = coordinates.shape[1]
+    _, node, counts = np.unique(coordinates, axis=0, return_inverse=True, return_counts=True)
+    node = node.reshape(-1)
+    if not np.all(counts == d):
+        return None
+    order = np.lexsort((np.arange(node.size), node))  # by node, then by dof number
+    component = np.empty(node.size, dtype=np.intp)
+    component[order] = np.tile(np.arange(d), counts.size)
+    x = coordinates - coordinates.mean(axis=0)
+    translations = np.zeros((node.size, d))
+    translations[np.arange(node.size), component] = 1.0
+    rotations = []
+    for a, b in ((0, 1),) if d == 2 else ((0, 1), (1, 2), (2, 0)):
+        mode = np.zeros(node.size)  # the rotation in the plane of axes a and b
+        mode[component == a] = -x[component == a, b]
+        mode[component == b] = x[component == b, a]
+        rotations.append(mode)
+    size = abs(sp.csr_array(K))
+
+    def rigid(modes: np.ndarray) -> bool:
+        return bool(np.all(np.abs(K @ modes).max(axis=0)
+                           <= MODE_RTOL * (size @ np.abs(modes)).max(axis=0)))
+
+    modes = np.column_stack((translations, *rotations))
+    if rigid(modes):
+        return modes
+    return translations if rigid(translations) else None
+
+
+@dataclass(eq=False)
+class AmgK:
+    """K's multigrid hierarchy and the conjugate-gradient solves by it (module docstring).
+
+    Attributes
+    ----------
+    K : K on the free dofs (CSR).
+    hierarchy : pyamg's smoothed-aggregation hierarchy of K.
+    floor : the residual norm at which any solve stops (ABSOLUTE of the loads').
+    iterations : the conjugate-gradient iterations of each solve so far.
+    setup_seconds : the hierarchy's set-up time.
+    """
+
+    K: sp.csr_matrix
+    hierarchy: Any
+    floor: float
+    iterations: list[int] = field(default_factory=list)
+    setup_seconds: float = 0.0
+
+    @classmethod
+    def of(cls, K: sp.spmatrix, modes: np.ndarray | None, loads: np.ndarray) -> AmgK:
+        """The hierarchy of K (``modes``: its near null space, None for pyamg's constant); a
+        ProblemError where the coarsest level shows K not positive definite."""
+        try:
+            import pyamg
+        except ImportError:
+            raise SolverNotAvailable("engine='amg' needs pyamg: pip install contactqp[amg] "
+                                     "(or pip install pyamg)") from None
+        import time
+
+        K = sp.csr_matrix(K)
+        K.sort_indices()
+        start = time.perf_counter()
+        hierarchy = pyamg.smoothed_aggregation_solver(K, B=modes, max_coarse=MAX_COARSE,
+                                                      coarse_solver="cholesky")
+        seconds = time.perf_counter() - start
+        coarsest = hierarchy.levels[-1].A
+        try:
+            np.linalg.cholesky(coarsest.toarray())
+        except np.linalg.LinAlgError:
+            raise ProblemError(
+                f"K must be positive definite: the coarsest level of its multigrid hierarchy, "
+                f"Pᵀ K P ({coarsest.shape[0]} x {coarsest.shape[0]}), has no Cholesky factor"
+            ) from None
+        return cls(K, hierarchy, ABSOLUTE * float(np.linalg.norm(loads)),
+                   setup_seconds=seconds)
+
+    def blocks_pay(self, columns: int) -> bool:
+        """Never (CholmodK's question): conjugate gradients solve a column at a time."""
+        return False
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """K⁻¹ rhs (one column or several, each by conjugate gradients)."""
+        rhs = np.asarray(rhs, dtype=float)
+        if rhs.ndim == 2:
+            return (np.column_stack([self.solve(rhs[:, k]) for k in range(rhs.shape[1])])
+                    if rhs.shape[1] else np.zeros(rhs.shape))
+        return self.cg(_Operator(self.K.shape[0], self.K.dot), rhs,
+                       self.hierarchy.aspreconditioner(cycle="V"), None)
+
+    solve_many = solve
+
+    def cg(self, operator: Any, rhs: np.ndarray, preconditioner: Any,
+           start: np.ndarray | None) -> np.ndarray:
+        """scipy's conjugate gradients to RTOL of ``rhs`` or the floor; a SolverError where
+        they do not get there."""
+        import scipy.sparse.linalg as spla
+
+        size = float(np.linalg.norm(rhs))
+        if size <= self.floor or size == 0.0:
+            return np.zeros_like(rhs) if start is None else start
+        steps = [0]
+
+        def count(_: np.ndarray) -> None:
+            steps[0] += 1
+
+        x, info = spla.cg(operator, rhs, x0=start, rtol=RTOL, atol=self.floor,
+                          maxiter=MAX_ITERATIONS, M=preconditioner, callback=count)
+        self.iterations.append(steps[0])
+        if info != 0:
+            residual = float(np.linalg.norm(rhs - operator.matvec(x))) / size
+            raise SolverError(f"conjugate gradients (engine='amg') did not converge: "
+                              f"{steps[0]} iterations left a relative residual {residual:.1e} "
+                              f"(K singular or not positive definite? engine='direct' "
+                              f"says which)")
+        return x
+
+
+def _Operator(n: int, matvec: Any) -> Any:
+    import scipy.sparse.linalg as spla
+
+    return spla.LinearOperator((n, n), matvec=matvec, dtype=float)
+
+
+def _gram(model: SparseModel, rows: np.ndarray) -> tuple[np.ndarray, Any, np.ndarray]:
+    """(the positions in ``rows`` of the rows kept, the factor of their C_A C_Aᵀ and its scale:
+    :func:`contactqp.model.saddle.gram_factor`), kept for the last KEPT_SETS sets. Where the
+    rows repeat each other's constraint, an independent subset of them by QR with column
+    pivoting of the scaled C_A C_Aᵀ (dense, up to DEPENDENT_ROWS rows; beyond, a
+    SolverError): the others hold nothing the kept ones do not."""
+    key = rows.tobytes()
+    sets = model.cache.sets
+    found = sets.get(key)
+    if found is None:
+        from contactqp.model.saddle import gram_factor
+
+        kept, gram = np.arange(rows.size), gram_factor(model.C[rows])
+        if gram is None:
+            kept = _independent(model, rows)
+            gram = gram_factor(model.C[rows[kept]])
+            if gram is None:
+                raise SolverError(f"the {rows.size} rows held repeat each other's constraint "
+                                  "and no independent subset was found (engine='direct' "
+                                  "takes them)")
+        while len(sets) >= KEPT_SETS:
+            sets.pop(next(iter(sets)))
+        found = sets[key] = (kept, *gram)
+    return found
+
+
+DEPENDENT_ROWS = 4000  # rows up to which a dependent set is reduced by a dense QR (128 MB)
+INDEPENDENT_RTOL = 1e-10  # R's diagonal below this of its first: a dependent row
+
+
+def _independent(model: SparseModel, rows: np.ndarray) -> np.ndarray:
+    """The positions in ``rows`` of an independent subset of them (rank-revealing QR of their
+    scaled C_A C_Aᵀ)."""
+    if rows.size > DEPENDENT_ROWS:
+        raise SolverError(f"the {rows.size} rows held repeat each other's constraint: "
+                          f"engine='amg' reduces such sets up to {DEPENDENT_ROWS} rows "
+                          "(engine='direct' takes them)")
+    import scipy.linalg
+
+    C_A = model.C[rows]
+    gram = (C_A @ C_A.T).toarray()
+    scale = 1.0 / np.sqrt(np.diagonal(gram))
+    _, R, order = scipy.linalg.qr(scale[:, None] * gram * scale[None, :], pivoting=True,
+                                  mode="economic")
+    rank = int(np.count_nonzero(np.abs(np.diagonal(R)) > INDEPENDENT_RTOL * abs(R[0, 0])))
+    return np.sort(order[:rank])
+
+
+def redundant(model: SparseModel, rows: np.ndarray) -> bool:
+    """Whether the rows repeat each other's constraint (C_A C_Aᵀ singular)."""
+    return bool(rows.size) and _gram(model, rows)[0].size < rows.size
+
+
+def solve_set(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.ndarray,
+              start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(u, λ_A) with K u + C_Aᵀλ_A = force and C_A u = gap, by projected conjugate gradients
+    (module docstring), started from ``start`` (projected onto the rows' gaps)."""
+    engine: AmgK = model.factor
+    if not rows.size:
+        return engine.cg(_Operator(model.n_free, engine.K.dot), force,
+                         engine.hierarchy.aspreconditioner(cycle="V"), start), np.zeros(0)
+    kept, factor, scale = _gram(model, rows)
+    C_A = model.C[rows[kept]]
+    C_At = C_A.T
+    gap = gap[kept]  # the others' gaps: met where the kept rows' are
+
+    def gram_solve(b: np.ndarray) -> np.ndarray:
+        return scale * factor.solve(scale * b)
+
+    def project(x: np.ndarray) -> np.ndarray:
+        return x - C_At @ gram_solve(C_A @ x)
+
+    cycle = engine.hierarchy.aspreconditioner(cycle="V")
+    particular = C_At @ gram_solve(gap)
+    operator = _Operator(model.n_free, lambda z: project(engine.K @ project(z)))
+    preconditioner = _Operator(model.n_free, lambda r: project(cycle.matvec(project(r))))
+    z = engine.cg(operator, project(force - engine.K @ particular), preconditioner,
+                  None if start is None else project(start - particular))
+    u = particular + project(z)
+    lam = np.zeros(rows.size)
+    lam[kept] = gram_solve(C_A @ (force - engine.K @ u))
+    return u, lam
+
+
+def set_solve(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """(δu, δλ_A) with K δu + C_Aᵀδλ_A = force and C_A δu = gap (the protocol's set solve)."""
+    return solve_set(model, rows, force, gap)
+
+
+def on_set(model: SparseModel, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(u, λ per row) with the rows ``active`` held on their gaps, the others carrying
+    nothing, started from u₀ = K⁻¹P."""
+    lam = np.zeros(model.n_contacts)
+    rows = np.flatnonzero(active)
+    u, lam[rows] = solve_set(model, rows, model.P, model.g[rows],
+                             start=model.free_displacement)
+    return u, lam
+
+
+__all__ = ["ABSOLUTE", "RTOL", "AmgK", "amg_installed", "on_set", "redundant",
+           "rigid_body_modes", "set_solve", "solve_set"]

@@ -1,0 +1,200 @@
+"""The iterative engine of a user's model (``engine="amg"``, contactqp.model.iterative): K
+solved by conjugate gradients with pyamg's multigrid, a set of rows held by projected
+conjugate gradients, and the check solving the same way.
+
+Every expected number comes from elsewhere: exact rational arithmetic on random spring
+networks (tests/test_problem_solve.py's exact_answer), the direct engine's answer
+(CHOLMOD's or SuperLU's factorisation, the Schur complement) on the Hertz models, and the
+definition of a rigid-body mode (K b = 0).
+
+Glossary: K stiffness, f loads, C rows, g gaps, λ the rows' forces (positive when they
+push), u the displacements; a "bound" is the check's error bound on u or λ.
+"""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import contactqp
+from contactqp.errors import OptionError, ProblemError, SolverNotAvailable
+from contactqp.model import iterative
+from contactqp.model.sparse import problem_model
+from test_problem_solve import Infeasible, assert_within_bounds, exact_answer, random_problem
+
+pytest.importorskip("pyamg")
+
+
+def within_bounds(result, u, lam, slack=1e-12):
+    """Whether the answer ``u``, ``lam`` (from elsewhere) is within the result's own error
+    bounds of it (plus round-off of its size)."""
+    check = result
+    return (np.abs(result.u - u).max(initial=0.0)
+            <= check.displacement_error_bound + slack * max(1.0, np.abs(u).max(initial=0.0))
+            and np.abs(result.contact_force - lam).max(initial=0.0)
+            <= check.force_error_bound + slack * max(1.0, np.abs(lam).max(initial=0.0)))
+
+
+@pytest.mark.parametrize("degenerate", ["", "touching", "redundant"])
+@pytest.mark.parametrize("seed", range(24))
+def test_lagrange_by_conjugate_gradients_is_the_exact_answer(seed, degenerate):
+    """Random spring networks (grounded or held by a prescribed dof, 1-6 rows of 1-4 dofs; a
+    row the answer touches with no force; a row that repeats two pushing ones): lagrange with
+    engine="amg" is verified, and the exact rational answer lies within its bounds (on Cᵀλ
+    where rows repeat a constraint): the bounds are measured, not assumed, as each solve is
+    inexact."""
+    try:
+        problem = random_problem(seed, degenerate)
+    except ProblemError:  # rows that no u meets: refused when made (tests/test_problem.py)
+        problem = None
+    if problem is None:
+        pytest.skip("no such problem from this seed")
+    try:
+        u, lam = exact_answer(problem)
+    except Infeasible:
+        pytest.skip("no u meets the rows")
+    result = contactqp.solve(problem, "lagrange", engine="amg")
+    assert result.options["engine"] == "amg"
+    assert assert_within_bounds(result, u, lam), result.summary()
+
+
+@pytest.fixture(scope="module")
+def hertz_models():
+    """The 2D cylinder and the 3D sphere of contactqp.fem on small meshes."""
+    fem = pytest.importorskip("contactqp.fem")
+    return {"cylinder": fem.cylinder_on_flat(fine=0.25).problem,
+            "sphere": fem.sphere_on_flat(zone=0.5, fine=0.1, growth=0.5).problem}
+
+
+@pytest.mark.parametrize("name", ["cylinder", "sphere"])
+def test_hertz_by_conjugate_gradients_equals_the_direct_engine(hertz_models, name):
+    """On the Hertz models (hundreds of dofs reading one row each, rigid-body modes from the
+    coordinates) the two engines give one answer: the direct engine's lies within the amg
+    engine's bounds, both verified; and the check, solving with conjugate gradients, bounds
+    that answer as tightly as the direct check does (to 1e-6 of the scales)."""
+    problem = hertz_models[name]
+    direct = contactqp.solve(problem, "lagrange")
+    by_cg = contactqp.solve(problem, "lagrange", engine="amg")
+    assert direct.verified and by_cg.verified, by_cg.summary()
+    assert within_bounds(by_cg, direct.u, direct.contact_force, slack=1e-10)
+    model = problem_model(problem, "amg")
+    assert model.engine == "amg" and problem_model(problem).engine == "direct"
+    assert by_cg.displacement_error_bound <= 1e-6 * model.displacement_scale
+    assert by_cg.force_error_bound <= 1e-6 * model.force_scale
+
+
+def test_a_loose_solve_is_flagged_or_bounded(monkeypatch, hertz_models):
+    """Conjugate gradients stopped at 1e-3 of the right-hand side: whatever the check says, the
+    direct engine's answer lies within its bounds (verified means right), and an answer this
+    far off is not verified."""
+    problem = contactqp.Problem(*(getattr(hertz_models["cylinder"], k) for k in "KfCg"),
+                                prescribed=hertz_models["cylinder"].prescribed,
+                                prescribed_values=hertz_models["cylinder"].prescribed_values)
+    direct = contactqp.solve(problem, "lagrange")
+    monkeypatch.setattr(iterative, "RTOL", 1e-3)
+    loose = contactqp.solve(problem, "lagrange", engine="amg")
+    assert within_bounds(loose, direct.u, direct.contact_force, slack=1e-10)
+    off = np.abs(loose.u - direct.u).max() / problem_model(problem).displacement_scale
+    if off > 1e-6:
+        assert not loose.verified
+
+
+@pytest.mark.parametrize("name", ["cylinder", "sphere"])
+def test_rigid_body_modes_move_nothing(hertz_models, name):
+    """The modes found from the coordinates are rigid: K b = 0 to round-off of |K||b| on the
+    whole K (3 in 2D, 6 in 3D); with the dofs of each node numbered in another order, what is
+    found (if anything) is still rigid."""
+    problem = hertz_models[name]
+    K = sp.csr_array(problem.K)
+    modes = iterative.rigid_body_modes(problem.coordinates, K)
+    d = problem.coordinates.shape[1]
+    assert modes.shape == (problem.n, 3 if d == 2 else 6)
+
+    def rigid(b):
+        return np.all(np.abs(K @ b).max(axis=0) <= 1e-8 * (abs(K) @ np.abs(b)).max(axis=0))
+
+    assert rigid(modes)
+    order = np.arange(problem.n).reshape(-1, d)[:, ::-1].reshape(-1)  # x, y(, z) reversed
+    swapped = iterative.rigid_body_modes(problem.coordinates, K[order][:, order])
+    assert swapped is None or rigid(swapped)
+
+
+def test_every_method_takes_the_engine(hertz_models):
+    """Each method on the cylinder with engine="amg": a verified answer equal to the direct
+    engine's lagrange within its bounds, or a refusal in one line; nothing printed."""
+    problem = hertz_models["cylinder"]
+    reference = contactqp.solve(problem, "lagrange")
+    for method in ("lagrange", "penalty", "augmented", "qp", "lemke", "pgs",
+                   "semismooth_newton"):
+        try:
+            result = contactqp.solve(problem, method, engine="amg")
+        except OptionError as refusal:
+            assert "\n" not in str(refusal)
+            continue
+        if result.verified:
+            assert within_bounds(result, reference.u, reference.contact_force, slack=1e-9), method
+
+
+def test_hostile_engine_requests(hertz_models, monkeypatch):
+    """A bad engine name, the engine on a bar scene or a friction problem: one line naming
+    it; pyamg missing: SolverNotAvailable saying how to install it; an indefinite K whose
+    coarsest level shows it: a ProblemError."""
+    problem = hertz_models["cylinder"]
+    with pytest.raises(OptionError, match="engine must be one of direct, amg; got 'cg'"):
+        contactqp.solve(problem, "lagrange", engine="cg")
+    with pytest.raises(OptionError, match="engine='amg' applies to a Problem without friction"):
+        contactqp.solve(contactqp.default_scene(), "lagrange", engine="amg")
+    friction = contactqp.Problem(sp.eye_array(2).tocsr(), np.array([1.0, 0.0]),
+                                 sp.csr_array(np.array([[1.0, 0.0]])), np.array([0.5]),
+                                 T=sp.csr_array(np.array([[0.0, 1.0]])), mu=0.3)
+    with pytest.raises(OptionError, match="engine='amg' applies to a Problem without friction"):
+        contactqp.solve(friction, "lagrange", engine="amg")
+    # K with a positive diagonal and every 2 x 2 minor positive, yet indefinite
+    K = np.array([[1.0, 0.9, 0.9], [0.9, 1.0, -0.9], [0.9, -0.9, 1.0]])
+    assert np.linalg.eigvalsh(K).min() < 0
+    indefinite = contactqp.Problem(sp.csr_array(K), np.ones(3),
+                                   sp.csr_array(np.array([[1.0, 0.0, 0.0]])), np.array([1.0]))
+    with pytest.raises(ProblemError, match="K must be positive definite"):
+        contactqp.solve(indefinite, "lagrange", engine="amg")
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_pyamg(name, *args, **kwargs):
+        if name == "pyamg":
+            raise ImportError("no pyamg")
+        return real_import(name, *args, **kwargs)
+
+    fresh = random_problem(3)
+    monkeypatch.setattr(builtins, "__import__", no_pyamg)
+    with pytest.raises(SolverNotAvailable, match="pip install contactqp\\[amg\\]"):
+        contactqp.solve(fresh, "lagrange", engine="amg")
+
+
+def test_the_engine_prints_nothing_and_leaves_the_problem(capfd):
+    """Nothing on stdout or stderr; the problem's arrays unchanged."""
+    problem = random_problem(11)
+    K, f = problem.K.toarray().copy(), problem.f.copy()
+    contactqp.solve(problem, "lagrange", engine="amg")
+    captured = capfd.readouterr()
+    assert captured.out == "" and captured.err == ""
+    assert np.array_equal(problem.K.toarray(), K) and np.array_equal(problem.f, f)
+
+
+def test_the_command_line_takes_the_engine(tmp_path, capsys):
+    """contactqp solve FILE --engine amg: the JSON names the engine, its answer verified and
+    equal to the direct engine's within its bounds; on a bar scene, exit 2 and one line."""
+    import json
+
+    from contactqp.cli import main
+
+    problem = random_problem(5)
+    path = contactqp.save_problem(problem, tmp_path / "springs.npz")
+    assert main(["solve", str(path), "--engine", "amg", "--json"]) == 0
+    found = json.loads(capsys.readouterr().out)
+    direct = contactqp.solve(problem, "lagrange")
+    assert found["options"]["engine"] == "amg" and found["verified"]
+    assert np.abs(np.array(found["u"]) - direct.u).max() <= (
+        found["displacement_error_bound"] + 1e-12 * direct.displacement_scale)
+    assert main(["solve", "--engine", "amg"]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count("\n") == 0 and "engine='amg' applies to a Problem" in error
