@@ -94,7 +94,8 @@ def check_model(model: ContactModel, u_free: np.ndarray, lam: np.ndarray, contac
 
 
 def check(model: Any, u: Any, contact_force: Any, reactions: Any = None,
-          contact: str = "inequality", tolerances: Tolerances = TOLERANCES) -> Check:
+          contact: str = "inequality", tolerances: Tolerances = TOLERANCES,
+          engine: str = "direct") -> Check:
     """Check an answer, however it was found, against a scene or a user's problem: the one
     check every Result carries (module docstring).
 
@@ -113,6 +114,10 @@ def check(model: Any, u: Any, contact_force: Any, reactions: Any = None,
         ``"inequality"`` or ``"equality"`` (every row held on its gap).
     tolerances : Tolerances
         The residuals' tolerances (default :data:`TOLERANCES`).
+    engine : str
+        For a Problem: how its model solves with K, "direct" (factorised) or "amg" (conjugate
+        gradients with pyamg's multigrid, :mod:`contactqp.model.iterative`), as
+        :func:`contactqp.solve`'s ``engine``; a scene takes "direct" only.
 
     Returns
     -------
@@ -129,6 +134,9 @@ def check(model: Any, u: Any, contact_force: Any, reactions: Any = None,
     if contact not in ("inequality", "equality"):
         raise OptionError(f"contact must be inequality or equality; got {contact!r}")
     if isinstance(model, (Scene, Model)):
+        if engine != "direct":
+            raise OptionError(f"engine={engine!r} applies to a Problem; a scene is checked "
+                              "with engine='direct'")
         model, u, lam, reactions = sized(model, u, contact_force, reactions)
         if not np.isfinite(reactions).all():
             return not_finite(model, model.equality | (contact == "equality"), lam)
@@ -137,7 +145,7 @@ def check(model: Any, u: Any, contact_force: Any, reactions: Any = None,
             chain=lambda pen: chain_bounds(model, u, lam, reactions, contact, tolerances,
                                            penetration=pen))
         return found
-    model = as_sparse_model(frictionless(model, "contactqp.check"))
+    model = as_sparse_model(frictionless(model, "contactqp.check"), engine)
     u = _sized("u", u, model.problem.n)
     lam = _sized("contact_force", contact_force, model.n_contacts)
     found = check_model(model, model.free_part(u), lam, contact, tolerances)

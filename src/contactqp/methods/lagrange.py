@@ -41,7 +41,7 @@ from contactqp.model import (
 from contactqp.model.augmented import STEPS
 from contactqp.model.chain.to_problem import problem_from_scene
 from contactqp.model.factor import CholmodK
-from contactqp.model.iterative import AmgK, solve_set
+from contactqp.model.iterative import AmgK, held_gaps_met, solve_set
 from contactqp.model.saddle import (  # noqa: F401 - banded_order, row_scale: their former place
     banded_order,
     row_scale,
@@ -411,9 +411,11 @@ def solve_projected(model, contact: str, *, max_iterations: int | None = None) -
     :mod:`contactqp.model.iterative`): the primal-dual active set from :func:`first_guess`,
     each set solved by projected conjugate gradients started from the last set's answer (no
     W_AA: a set costs the same whatever the rows in contact); the set it settles on is
-    refined once with the system's own residuals (a product with K). A set that comes back
-    (rows that repeat a constraint) is a SolverError: this engine has no Schur complement to
-    hand over to."""
+    refined once with the system's own residuals (a product with K). ``info["cg_iterations"]``:
+    the conjugate-gradient iterations of each solve. A set that comes back, or a set it
+    settles on whose dependent rows miss their gaps (rows that repeat a constraint with gaps
+    that conflict), is a SolverError: this engine has no Schur complement to hand over to."""
+    solves = len(model.factor.iterations)  # the engine's solves before this one's
     equality = model.equality | (contact == "equality")
     active = equality | first_guess(model)
     limit = default_max_iterations(model.n_contacts) if max_iterations is None else int(
@@ -425,12 +427,17 @@ def solve_projected(model, contact: str, *, max_iterations: int | None = None) -
         u, lam[rows] = solve_set(model, rows, model.P, model.g[rows], start=u)
         following = next_set(model, active, u, lam, equality)
         if np.array_equal(following, active):
+            if not held_gaps_met(model, rows, u):  # settled on dependent rows left unmet
+                raise SolverError(f"lagrange: the {rows.size} rows held repeat each other's "
+                                  "constraint with gaps that no u meets at once: engine='amg' "
+                                  "holds an independent subset and does not choose which "
+                                  "rows to let go (engine='direct' does)")
             residual = model.K @ u - model.P + model.C.T @ lam
             du, dlam = model.set_solve(rows, residual, model.C[rows] @ u - model.g[rows])
             u, lam[rows] = u - du, lam[rows] - dlam
             return Solution(u, lam, solver="lagrange", iterations=iteration,
                             info={"active_set": "primal-dual", "engine": "amg",
-                                  "cg_iterations": sum(model.factor.iterations)})
+                                  "cg_iterations": model.factor.iterations[solves:]})
         if following.tobytes() in seen:
             raise SolverError("lagrange: the active set came back to a set it left (rows "
                               "that repeat a constraint?); engine='direct' hands such sets "

@@ -24,12 +24,18 @@ and small, factored once per set by SuperLU: :func:`contactqp.model.saddle.gram_
 the V-cycle projected the same way (Π M Π) as the preconditioner, started from the last set's
 answer. No W_AA is formed, so a set costs the same whatever the rows in contact. Where rows
 repeat each other's constraint (C_A C_Aᵀ singular), an independent subset of them is held and
-the others carry nothing: the answer fixes only Cᵀλ there (:func:`redundant`).
+the others carry nothing: the answer fixes only Cᵀλ there (:func:`redundant`). Where the rows
+left out then miss their gaps (dependent rows whose gaps conflict: which to let go is a choice
+this engine does not make), a SolverError says so; the direct engine hands such sets to the
+Schur complement's least-norm solve (measured on random spring networks with a touching row:
+1 problem of 990).
 
-Errors. Each solve stops where its residual is within RTOL of its right-hand side or within
-ABSOLUTE of the loads' (so that a correction of a refinement costs a few iterations); it is
-inexact, and the check measures how much: its reference is refined with residuals computed by
-products with K, and the refinement's tail of corrections is its bound
+Errors. Each solve stops where its residual is within RTOL (1e-10) of its own right-hand side,
+a correction of a refinement (:func:`set_solve`) within CORRECTION_RTOL (1e-6) of its own:
+never at an absolute floor, under which what a correction leaves would be hidden from the next.
+The solves are inexact, and the check measures how much: its reference is refined with
+residuals computed by products with K (each correction shrinks what is left by about
+CORRECTION_RTOL), and the refinement's tail of corrections is its bound
 (:mod:`contactqp.check.on_set`). A solve that does not reach its tolerance in MAX_ITERATIONS is
 a SolverError.
 
@@ -53,22 +59,16 @@ from contactqp.errors import ProblemError, SolverError, SolverNotAvailable
 SparseModel = Any  # the model these functions read (contactqp.model.sparse.SparseModel)
 
 RTOL = 1e-10  # a solve stops where its residual is this much of its right-hand side's ...
-ABSOLUTE = 1e-14  # ... or this much of the loads' (the norm of P), whichever is larger
+CORRECTION_RTOL = 1e-6  # ... a correction of a refinement where it is this much (set_solve)
 MAX_ITERATIONS = 2000  # conjugate-gradient iterations at most per solve
 MAX_COARSE = 500  # unknowns of the coarsest level, at most where the aggregation gets there
 # (solved by a dense Cholesky factor: pyamg's default, a pseudo-inverse by the SVD, took 6.4 s
 # on the 1 908 unknowns of the sphere's coarsest level at 32 550 dofs, Cholesky 0.1 s)
 MODE_RTOL = 1e-8  # a rigid-body mode is kept where |K b| is at most this of |K||b|
+UNMET = 1e-8  # a held row that misses its gap by more than this of its terms: a dependent
+# set whose gaps conflict (:func:`held_gaps_met`)
+PROJECTED = 1e-13  # a projected right-hand side below this of the unprojected one: round-off
 KEPT_SETS = 2  # the sets' factors of C_A C_Aᵀ kept (the loop's last and the check's)
-
-
-def amg_installed() -> bool:
-    """Whether pyamg (the extra ``contactqp[amg]``) imports."""
-    try:
-        import pyamg  # noqa: F401
-    except ImportError:
-        return False
-    return True
 
 
 def rigid_body_modes(coordinates: np.ndarray | None, K: sp.csr_array) -> np.ndarray | None:
@@ -116,19 +116,17 @@ class AmgK:
     ----------
     K : K on the free dofs (CSR).
     hierarchy : pyamg's smoothed-aggregation hierarchy of K.
-    floor : the residual norm at which any solve stops (ABSOLUTE of the loads').
     iterations : the conjugate-gradient iterations of each solve so far.
     setup_seconds : the hierarchy's set-up time.
     """
 
     K: sp.csr_matrix
     hierarchy: Any
-    floor: float
     iterations: list[int] = field(default_factory=list)
     setup_seconds: float = 0.0
 
     @classmethod
-    def of(cls, K: sp.spmatrix, modes: np.ndarray | None, loads: np.ndarray) -> AmgK:
+    def of(cls, K: sp.spmatrix, modes: np.ndarray | None) -> AmgK:
         """The hierarchy of K (``modes``: its near null space, None for pyamg's constant); a
         ProblemError where the coarsest level shows K not positive definite."""
         try:
@@ -152,8 +150,7 @@ class AmgK:
                 f"K must be positive definite: the coarsest level of its multigrid hierarchy, "
                 f"Pᵀ K P ({coarsest.shape[0]} x {coarsest.shape[0]}), has no Cholesky factor"
             ) from None
-        return cls(K, hierarchy, ABSOLUTE * float(np.linalg.norm(loads)),
-                   setup_seconds=seconds)
+        return cls(K, hierarchy, setup_seconds=seconds)
 
     def blocks_pay(self, columns: int) -> bool:
         """Never (CholmodK's question): conjugate gradients solve a column at a time."""
@@ -171,23 +168,28 @@ class AmgK:
     solve_many = solve
 
     def cg(self, operator: Any, rhs: np.ndarray, preconditioner: Any,
-           start: np.ndarray | None) -> np.ndarray:
-        """scipy's conjugate gradients to RTOL of ``rhs`` or the floor; a SolverError where
-        they do not get there."""
+           start: np.ndarray | None, rtol: float | None = None) -> np.ndarray:
+        """scipy's conjugate gradients to ``rtol`` (default RTOL) of ``rhs``; a SolverError
+        where they do not get there."""
         import scipy.sparse.linalg as spla
 
         size = float(np.linalg.norm(rhs))
-        if size <= self.floor or size == 0.0:
-            return np.zeros_like(rhs) if start is None else start
+        if size == 0.0:
+            return np.zeros_like(rhs)
         steps = [0]
 
         def count(_: np.ndarray) -> None:
             steps[0] += 1
 
-        x, info = spla.cg(operator, rhs, x0=start, rtol=RTOL, atol=self.floor,
-                          maxiter=MAX_ITERATIONS, M=preconditioner, callback=count)
+        with np.errstate(all="ignore"):  # a breakdown is reported below, never printed
+            try:
+                x, info = spla.cg(operator, rhs, x0=start, rtol=RTOL if rtol is None else rtol,
+                                  atol=0.0,
+                                  maxiter=MAX_ITERATIONS, M=preconditioner, callback=count)
+            except ValueError:  # NaN reached the coarsest level's solve
+                x, info = np.full_like(rhs, np.nan), -1
         self.iterations.append(steps[0])
-        if info != 0:
+        if info != 0 or not np.isfinite(x).all():
             residual = float(np.linalg.norm(rhs - operator.matvec(x))) / size
             raise SolverError(f"conjugate gradients (engine='amg') did not converge: "
                               f"{steps[0]} iterations left a relative residual {residual:.1e} "
@@ -256,13 +258,14 @@ def redundant(model: SparseModel, rows: np.ndarray) -> bool:
 
 
 def solve_set(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.ndarray,
-              start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+              start: np.ndarray | None = None, rtol: float = RTOL
+              ) -> tuple[np.ndarray, np.ndarray]:
     """(u, λ_A) with K u + C_Aᵀλ_A = force and C_A u = gap, by projected conjugate gradients
-    (module docstring), started from ``start`` (projected onto the rows' gaps)."""
+    (module docstring) to ``rtol``, started from ``start`` (projected onto the rows' gaps)."""
     engine: AmgK = model.factor
     if not rows.size:
         return engine.cg(_Operator(model.n_free, engine.K.dot), force,
-                         engine.hierarchy.aspreconditioner(cycle="V"), start), np.zeros(0)
+                         engine.hierarchy.aspreconditioner(cycle="V"), start, rtol), np.zeros(0)
     kept, factor, scale = _gram(model, rows)
     C_A = model.C[rows[kept]]
     C_At = C_A.T
@@ -278,18 +281,33 @@ def solve_set(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.n
     particular = C_At @ gram_solve(gap)
     operator = _Operator(model.n_free, lambda z: project(engine.K @ project(z)))
     preconditioner = _Operator(model.n_free, lambda r: project(cycle.matvec(project(r))))
-    z = engine.cg(operator, project(force - engine.K @ particular), preconditioner,
-                  None if start is None else project(start - particular))
-    u = particular + project(z)
+    unheld = force - engine.K @ particular
+    rhs = project(unheld)
+    if kept.size >= model.n_free or np.linalg.norm(rhs) <= PROJECTED * np.linalg.norm(unheld):
+        u = particular  # the rows hold every dof (what is left is the projection's round-off)
+    else:
+        z = engine.cg(operator, rhs, preconditioner,
+                      None if start is None else project(start - particular), rtol)
+        u = particular + project(z)
     lam = np.zeros(rows.size)
     lam[kept] = gram_solve(C_A @ (force - engine.K @ u))
     return u, lam
 
 
+def held_gaps_met(model: SparseModel, rows: np.ndarray, u: np.ndarray) -> bool:
+    """Whether u meets every held row's gap to UNMET of the row's terms |C_A||u| + |g_A|: a
+    dependent set is solved on an independent subset of its rows (:func:`solve_set`), and the
+    rows left out miss their gaps where the set's gaps conflict."""
+    C_A, g_A = model.C[rows], model.g[rows]
+    return bool(np.all(np.abs(C_A @ u - g_A) <= UNMET * (abs(C_A) @ np.abs(u) + np.abs(g_A))))
+
+
 def set_solve(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.ndarray
               ) -> tuple[np.ndarray, np.ndarray]:
-    """(δu, δλ_A) with K δu + C_Aᵀδλ_A = force and C_A δu = gap (the protocol's set solve)."""
-    return solve_set(model, rows, force, gap)
+    """(δu, δλ_A) with K δu + C_Aᵀδλ_A = force and C_A δu = gap (the protocol's set solve: a
+    correction of a refinement, to CORRECTION_RTOL; what it leaves is the next correction,
+    which the refinement measures)."""
+    return solve_set(model, rows, force, gap, rtol=CORRECTION_RTOL)
 
 
 def on_set(model: SparseModel, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -302,5 +320,5 @@ def on_set(model: SparseModel, active: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return u, lam
 
 
-__all__ = ["ABSOLUTE", "RTOL", "AmgK", "amg_installed", "on_set", "redundant",
-           "rigid_body_modes", "set_solve", "solve_set"]
+__all__ = ["CORRECTION_RTOL", "RTOL", "AmgK", "held_gaps_met", "on_set",
+           "redundant", "rigid_body_modes", "set_solve", "solve_set"]

@@ -401,6 +401,8 @@ def problem_model(problem: Problem, engine: str = "direct") -> SparseModel:
     scales, the columns of W), as :func:`contactqp.model.chain.model.scene_model` does for a
     scene. ``engine``: "direct" (K factorised) or "amg" (conjugate gradients with pyamg's
     multigrid: :mod:`contactqp.model.iterative`)."""
+    if engine not in ENGINES:
+        raise OptionError(f"engine must be one of {', '.join(ENGINES)}; got {engine!r}")
     key = _KEPT_MODEL if engine == "direct" else f"{_KEPT_MODEL}_{engine}"
     model = problem.__dict__.get(key)
     if model is None:
@@ -412,13 +414,13 @@ _KEPT_MODEL = "_sparse_model"  # where problem_model keeps a problem's model
 ENGINES = ("direct", "amg")  # how a user's model solves with K (problem_model)
 
 
-def as_sparse_model(value: Any) -> SparseModel:
-    """``value`` if it is a SparseModel, the kept model of a Problem; an OptionError for
-    anything else."""
+def as_sparse_model(value: Any, engine: str = "direct") -> SparseModel:
+    """``value`` if it is a SparseModel, the kept model of a Problem (by ``engine``); an
+    OptionError for anything else."""
     if isinstance(value, SparseModel):
         return value
     if isinstance(value, Problem):
-        return problem_model(value)
+        return problem_model(value, engine)
     raise OptionError(f"the model must be a contactqp.Scene, a contactqp.Problem or a model "
                       f"of one, got {type(value).__name__}")
 
@@ -442,7 +444,7 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING, engine: str =
     C = sp.csr_array(problem.C[:, free])
     if engine == "amg" and free.size:
         modes = iterative.rigid_body_modes(problem.coordinates, problem.K)
-        factor = AmgK.of(K_II, None if modes is None else modes[free], P)
+        factor = AmgK.of(K_II, None if modes is None else modes[free])
         return SparseModel(problem, free, K_II, P, C, g, factor, None, ColumnCache())
     factor = cholmod_of(K_II, C) if ordering == ORDERING else None
     if factor is not None:  # K positive definite, its pivots far from 0
