@@ -2,6 +2,7 @@
 on this machine (issue 39's 3D goal; the measurements on docs/benchmarks.md, "3D at 10⁶ dofs").
 
     python benchmarks/route3d.py [--level 6.5] [--cholmod] [--set-solve] [--solve]
+                                 [--engines direct,amg]
 
 Builds the sphere of benchmarks/hertz3d.py's level k (``sphere_on_flat``, δ = 10 µm; level
 6.5 has 1.1·10⁶ dofs, and building it takes about 4 minutes and 14 GB), then times on K on the
@@ -24,8 +25,9 @@ free dofs:
 - with --solve (and pyamg), the route built: ``contactqp.solve(problem, "lagrange",
   engine="amg")`` with its check (contactqp.model.iterative): the build of the model (the
   hierarchy), the solve and the check, the conjugate-gradient iterations of each solve, the
-  verdict and its bounds, a and p₀ against Hertz's, and the peak memory. Alone (without the
-  other options) it times nothing else.
+  verdict and its bounds, a and p₀ against Hertz's, and the peak memory; with --engines
+  direct,amg the direct engine first, the same way. Alone (without the other options) it
+  times nothing else.
 
 Prints one line per step as it is measured, and the peak memory of the process.
 """
@@ -73,6 +75,8 @@ def main() -> None:
                         help="also the set solve by conjugate gradients (needs pyamg)")
     parser.add_argument("--solve", action="store_true",
                         help="solve with lagrange and engine='amg', checked (needs pyamg)")
+    parser.add_argument("--engines", default="amg",
+                        help="with --solve, the engines in turn (e.g. direct,amg)")
     args = parser.parse_args()
     fine, growth = level_sizes(args.level)
     start = time.perf_counter()
@@ -81,7 +85,8 @@ def main() -> None:
     print(f"level {args.level:g}: {problem.n} dofs, {problem.m} rows; built in "
           f"{time.perf_counter() - start:.1f} s, peak {peak_gb():.1f} GB", flush=True)
     if args.solve:
-        solve_by_amg(model)
+        for engine in args.engines.split(","):
+            solve_by(model, engine)
         if not (args.cholmod or args.set_solve):
             return
     free = np.setdiff1d(np.arange(problem.n), problem.prescribed)
@@ -132,23 +137,25 @@ def main() -> None:
         print(f"CHOLMOD solve: {time.perf_counter() - start:.1f} s", flush=True)
 
 
-def solve_by_amg(model: Any) -> None:
-    """lagrange with engine="amg" and its check on the sphere (module docstring)."""
+def solve_by(model: Any, engine: str) -> None:
+    """lagrange with ``engine`` and its check on the sphere (module docstring)."""
     from contactqp.fem import measure_sphere
     from contactqp.model.sparse import problem_model
 
     start = time.perf_counter()
-    result = contactqp.solve(model.problem, "lagrange", engine="amg")
+    result = contactqp.solve(model.problem, "lagrange", engine=engine)
     seconds = time.perf_counter() - start
     timings = ", ".join(f"{k} {v:.1f} s" for k, v in result.timings.items())
-    engine = problem_model(model.problem, "amg").factor
-    print(f"lagrange, engine='amg': {seconds:.1f} s ({timings}; the hierarchy's set-up "
-          f"{engine.setup_seconds:.1f} s), verified {result.verified}, force bound "
-          f"{result.force_error_bound:.1e}, displacement bound "
+    factor = problem_model(model.problem, engine).factor
+    setup = (f"; the hierarchy's set-up {factor.setup_seconds:.1f} s" if engine == "amg"
+             else "")
+    print(f"lagrange, engine={engine!r}: {seconds:.1f} s ({timings}{setup}), verified "
+          f"{result.verified}, force bound {result.force_error_bound:.1e}, displacement bound "
           f"{result.displacement_error_bound:.1e}, "
           f"{int(np.count_nonzero(result.contact_force > 0))} rows in contact, "
           f"peak {peak_gb():.1f} GB", flush=True)
-    print(f"conjugate-gradient iterations per solve: {engine.iterations}", flush=True)
+    if engine == "amg":
+        print(f"conjugate-gradient iterations per solve: {factor.iterations}", flush=True)
     hertz = measure_sphere(model, result.contact_force, resolution=result.force_error_bound)
     a_off = hertz.contact_radius / hertz.hertz_contact_radius - 1.0
     p0_off = hertz.peak_pressure / hertz.hertz_peak_pressure - 1.0

@@ -3,11 +3,11 @@ sparse model whose factorisation does not fit in memory (``engine="amg"``; pyamg
 extra ``contactqp[amg]``).
 
 Why. A direct factorisation of K grows faster than K in 3D: on the Hertz sphere at 1.1·10⁶
-dofs CHOLMOD's numeric factorisation did not fit in 24 GB beside the model, where pyamg's
-hierarchy took 37 s to set up and a solve of K 24 iterations, 38 s (docs/benchmarks.md, "3D at
-10⁶ dofs"). Below that size the direct engine is faster (at 9·10⁴ dofs a solve of K by
-conjugate gradients took 2.3–2.7 s, CHOLMOD's factorisation 4.5–5.3 s once, then
-milliseconds a solve), so ``engine="direct"`` stays the default.
+dofs CHOLMOD's numeric factorisation did not fit in 24 GB beside the model. With this engine
+lagrange solved it and the check verified it in 451 s (the hierarchy 28 s, 12 solves of 24–62
+iterations; a and p₀ within 0.05 % of Hertz: docs/benchmarks.md, "3D at 10⁶ dofs, solved").
+Below about 10⁵ dofs the direct engine is faster (a factorisation once, then milliseconds a
+solve), so ``engine="direct"`` stays the default.
 
 The engine (:class:`AmgK`): pyamg's smoothed aggregation of K on the free dofs, with the
 rigid-body modes of the nodes as its near null space where the problem's coordinates give them
