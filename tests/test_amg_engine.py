@@ -232,3 +232,18 @@ def test_check_takes_the_engine(hertz_models):
         contactqp.check(contactqp.default_scene(), np.zeros(5), np.zeros(1), engine="amg")
     with pytest.raises(OptionError, match="engine must be one of"):
         contactqp.check(problem, direct.u, direct.contact_force, engine="pcg")
+
+
+@pytest.mark.parametrize("engine", [None, 3, np.array(["amg"]), ["amg"], "AMG", "amg " * 40])
+def test_an_engine_of_any_other_value_is_one_line(engine):
+    """solve and check with an engine that is not "direct" or "amg" (None, a number, an
+    array, a list, another case, a long string): an OptionError in one line naming it, for a
+    problem and a scene alike."""
+    problem = random_problem(2)
+    for call in (lambda: contactqp.solve(problem, "lagrange", engine=engine),
+                 lambda: contactqp.solve(contactqp.default_scene(), "lagrange", engine=engine),
+                 lambda: contactqp.check(problem, np.zeros(problem.n), np.zeros(problem.m),
+                                         engine=engine)):
+        with pytest.raises(OptionError, match="engine must be one of direct, amg; got") as err:
+            call()
+        assert "\n" not in str(err.value) and len(str(err.value)) < 120

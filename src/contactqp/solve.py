@@ -24,7 +24,7 @@ from contactqp.model import Condensed, Model, condensed_model, scene_model
 from contactqp.model.chain import layout_of
 from contactqp.model.chain.floating import unheld_bars
 from contactqp.model.chain.to_problem import problem_from_scene
-from contactqp.model.sparse import ENGINES, problem_model
+from contactqp.model.sparse import check_engine, problem_model
 from contactqp.problem import Problem
 from contactqp.problem_files import load_problem
 from contactqp.result import Result, make_result, with_bar_quantities
@@ -143,7 +143,7 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
     """
     if isinstance(scene, (str, os.PathLike)):
         scene = as_target(scene)
-    if engine != "direct":
+    if not (isinstance(engine, str) and engine == "direct"):
         _check_engine(scene, engine)
     if isinstance(scene, Scene) and scene.beds:  # friction: solved as the scene's problem,
         # with the bar quantities of the scene's own numbering
@@ -172,8 +172,7 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
 def _check_engine(target: Any, engine: Any) -> None:
     """An OptionError where ``engine`` is not one of ENGINES, or is not "direct" for a bar
     scene or a problem with friction."""
-    if not isinstance(engine, str) or engine not in ENGINES:
-        raise OptionError(f"engine must be one of {', '.join(ENGINES)}; got {engine!r}")
+    check_engine(engine)
     if not isinstance(target, Problem) or target.T is not None:
         raise OptionError(f"engine={engine!r} applies to a Problem without friction; bar "
                           "scenes and friction solve with engine='direct'")

@@ -38,7 +38,7 @@ from contactqp.errors import OptionError
 from contactqp.model.base import ContactModel, natural_map
 from contactqp.model.chain.model import Model
 from contactqp.model.chain.to_problem import problem_from_scene
-from contactqp.model.sparse import as_sparse_model
+from contactqp.model.sparse import as_sparse_model, check_engine
 from contactqp.problem import frictionless
 from contactqp.scene import Scene
 
@@ -134,7 +134,8 @@ def check(model: Any, u: Any, contact_force: Any, reactions: Any = None,
     if contact not in ("inequality", "equality"):
         raise OptionError(f"contact must be inequality or equality; got {contact!r}")
     if isinstance(model, (Scene, Model)):
-        if engine != "direct":
+        if not (isinstance(engine, str) and engine == "direct"):
+            check_engine(engine)
             raise OptionError(f"engine={engine!r} applies to a Problem; a scene is checked "
                               "with engine='direct'")
         model, u, lam, reactions = sized(model, u, contact_force, reactions)

@@ -401,8 +401,7 @@ def problem_model(problem: Problem, engine: str = "direct") -> SparseModel:
     scales, the columns of W), as :func:`contactqp.model.chain.model.scene_model` does for a
     scene. ``engine``: "direct" (K factorised) or "amg" (conjugate gradients with pyamg's
     multigrid: :mod:`contactqp.model.iterative`)."""
-    if engine not in ENGINES:
-        raise OptionError(f"engine must be one of {', '.join(ENGINES)}; got {engine!r}")
+    check_engine(engine)
     key = _KEPT_MODEL if engine == "direct" else f"{_KEPT_MODEL}_{engine}"
     model = problem.__dict__.get(key)
     if model is None:
@@ -412,6 +411,13 @@ def problem_model(problem: Problem, engine: str = "direct") -> SparseModel:
 
 _KEPT_MODEL = "_sparse_model"  # where problem_model keeps a problem's model
 ENGINES = ("direct", "amg")  # how a user's model solves with K (problem_model)
+
+
+def check_engine(engine: Any) -> None:
+    """An OptionError in one line where ``engine`` is not one of ENGINES (any type)."""
+    if not (isinstance(engine, str) and engine in ENGINES):
+        shown = repr(engine) if isinstance(engine, str) else type(engine).__name__
+        raise OptionError(f"engine must be one of {', '.join(ENGINES)}; got {shown[:60]}")
 
 
 def as_sparse_model(value: Any, engine: str = "direct") -> SparseModel:
@@ -432,8 +438,7 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING, engine: str =
     where nothing holds the model along a mode K leaves free. ``engine="amg"``: K_II's
     multigrid hierarchy instead of its factorisation (:mod:`contactqp.model.iterative`; K
     positive definite)."""
-    if engine not in ENGINES:
-        raise OptionError(f"engine must be one of {', '.join(ENGINES)}; got {engine!r}")
+    check_engine(engine)
     n = problem.n
     held = np.zeros(n, dtype=bool)
     held[problem.prescribed] = True
@@ -472,5 +477,16 @@ def _loads_and_gaps(problem: Problem, free: np.ndarray) -> tuple[np.ndarray, np.
     return P, g
 
 
-__all__ = ["ENGINES", "ORDERING", "SparseModel", "build_sparse_model", "diagonal_pivots",
-           "elimination_tree", "factorise", "forward_columns", "free_modes", "reach"]
+__all__ = [
+    "ENGINES",
+    "ORDERING",
+    "SparseModel",
+    "build_sparse_model",
+    "check_engine",
+    "diagonal_pivots",
+    "elimination_tree",
+    "factorise",
+    "forward_columns",
+    "free_modes",
+    "reach",
+]
