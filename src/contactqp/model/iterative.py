@@ -27,8 +27,9 @@ repeat each other's constraint (C_A C_Aᵀ singular), an independent subset of t
 the others carry nothing: the answer fixes only Cᵀλ there (:func:`redundant`). Where the rows
 left out then miss their gaps (dependent rows whose gaps conflict: which to let go is a choice
 this engine does not make), a SolverError says so; the direct engine hands such sets to the
-Schur complement's least-norm solve (measured on random spring networks with a touching row:
-1 problem of 990).
+Schur complement's least-norm solve (on random spring networks of 5–9 dofs, 990 problems of
+tests/test_problem_solve.py's kinds with fresh seeds, a third of them built to hold dependent
+or touching rows: 21 refused so, none answered wrong).
 
 Errors. Each solve stops where its residual is within RTOL (1e-10) of its own right-hand side,
 a correction of a refinement (:func:`set_solve`) within CORRECTION_RTOL (1e-6) of its own:
