@@ -102,8 +102,10 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
         How a Problem's model solves with K: "direct" (the default: K factorised once,
         :mod:`contactqp.model.factor`) or "amg" (conjugate gradients with pyamg's algebraic
         multigrid, for models whose factorisation does not fit in memory, 3D at 10⁶ dofs:
-        :mod:`contactqp.model.iterative`; the extra ``contactqp[amg]``). The check solves
-        with the same engine. Bar scenes and problems with friction take "direct" only.
+        :mod:`contactqp.model.iterative`; the extra ``contactqp[amg]``), for method
+        "lagrange" (the others factorise a matrix of their own or form W, refused with the
+        reason). The check solves with the same engine. Bar scenes and problems with friction
+        take "direct" only.
     **options
         The method's options (:data:`contactqp.methods.METHODS` names each), in the scene's
         units. "lagrange": ``max_iterations``, ``active_set`` ("hull" or "passed").
@@ -169,6 +171,9 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
                        timings={"build": built - start, "solve": solved - built})
 
 
+ENGINE_METHODS = ("lagrange",)  # the methods engine="amg" runs
+
+
 def _check_engine(target: Any, engine: Any) -> None:
     """An OptionError where ``engine`` is not one of ENGINES, or is not "direct" for a bar
     scene or a problem with friction."""
@@ -191,6 +196,12 @@ def solve_problem(problem: Problem, method: Any, contact: Any, formulation: Any,
         raise OptionError(f"formulation={formulation!r} applies to bar scenes; a Problem "
                           "is solved as given (formulation='auto')")
     start = time.perf_counter()
+    if engine != "direct" and spec.name not in ENGINE_METHODS:
+        raise OptionError(f"engine={engine!r} runs {', '.join(ENGINE_METHODS)} (sets of rows by "
+                          f"projected conjugate gradients); {spec.name} factorises a matrix of "
+                          "its own or forms W = C K⁻¹ Cᵀ a solve per row, which at the sizes "
+                          "this engine is for does not fit or does not end: use "
+                          "engine='direct'")
     model = problem_model(problem, engine)
     refusal = spec.accepts(model, contact, options)
     if refusal:
