@@ -41,7 +41,7 @@ from contactqp.model import (
 from contactqp.model.augmented import STEPS
 from contactqp.model.chain.to_problem import problem_from_scene
 from contactqp.model.factor import CholmodK
-from contactqp.model.iterative import AmgK, held_gaps_met, solve_set
+from contactqp.model.iterative import AmgK, solve_set, unmet_rows
 from contactqp.model.saddle import (  # noqa: F401 - banded_order, row_scale: their former place
     banded_order,
     row_scale,
@@ -412,22 +412,30 @@ def solve_projected(model, contact: str, *, max_iterations: int | None = None) -
     each set solved by projected conjugate gradients started from the last set's answer (no
     W_AA: a set costs the same whatever the rows in contact); the set it settles on is
     refined once with the system's own residuals (a product with K). ``info["cg_iterations"]``:
-    the conjugate-gradient iterations of each solve. A set that comes back, or a set it
-    settles on whose dependent rows miss their gaps (rows that repeat a constraint with gaps
-    that conflict), is a SolverError: this engine has no Schur complement to hand over to."""
+    the conjugate-gradient iterations of each solve. A set it settles on whose dependent rows
+    leave some rows' gaps unmet is solved again with those rows held first (the greedy
+    independent subset of :func:`contactqp.model.iterative.solve_set`), and decided again;
+    where that too leaves a gap unmet (rows that repeat a constraint with gaps that
+    conflict), or a set comes back, a SolverError: this engine has no Schur complement to hand
+    over to."""
     solves = len(model.factor.iterations)  # the engine's solves before this one's
     equality = model.equality | (contact == "equality")
     active = equality | first_guess(model)
     limit = default_max_iterations(model.n_contacts) if max_iterations is None else int(
         max_iterations)
     seen, u = {active.tobytes()}, model.free_displacement.copy()
+    prefer = None  # rows of a dependent set to hold first: those the last solve left unmet
     for iteration in range(1, limit + 1):
         rows = np.flatnonzero(active)
         lam = np.zeros(model.n_contacts)
-        u, lam[rows] = solve_set(model, rows, model.P, model.g[rows], start=u)
+        u, lam[rows] = solve_set(model, rows, model.P, model.g[rows], start=u, prefer=prefer)
         following = next_set(model, active, u, lam, equality)
         if np.array_equal(following, active):
-            if not held_gaps_met(model, rows, u):  # settled on dependent rows left unmet
+            unmet = unmet_rows(model, rows, u)
+            if unmet.size and prefer is None:  # settled on dependent rows, some left unmet:
+                prefer = unmet  # the same set again, those held first
+                continue
+            if unmet.size:
                 raise SolverError(f"lagrange: the {rows.size} rows held repeat each other's "
                                   "constraint with gaps that no u meets at once: engine='amg' "
                                   "holds an independent subset and does not choose which "
@@ -438,6 +446,7 @@ def solve_projected(model, contact: str, *, max_iterations: int | None = None) -
             return Solution(u, lam, solver="lagrange", iterations=iteration,
                             info={"active_set": "primal-dual", "engine": "amg",
                                   "cg_iterations": model.factor.iterations[solves:]})
+        prefer = None
         if following.tobytes() in seen:
             raise SolverError("lagrange: the active set came back to a set it left (rows "
                               "that repeat a constraint?); engine='direct' hands such sets "

@@ -25,11 +25,12 @@ the V-cycle projected the same way (Π M Π) as the preconditioner, started from
 answer. No W_AA is formed, so a set costs the same whatever the rows in contact. Where rows
 repeat each other's constraint (C_A C_Aᵀ singular), an independent subset of them is held and
 the others carry nothing: the answer fixes only Cᵀλ there (:func:`redundant`). Where the rows
-left out then miss their gaps (dependent rows whose gaps conflict: which to let go is a choice
-this engine does not make), a SolverError says so; the direct engine hands such sets to the
-Schur complement's least-norm solve (on random spring networks of 5–9 dofs, 990 problems of
+left out then miss their gaps (dependent rows whose gaps conflict), lagrange holds those rows
+first and decides again (:func:`contactqp.methods.lagrange.solve_projected`); where that too
+leaves a gap unmet, a SolverError says so, and the direct engine hands such sets to the Schur
+complement's least-norm solve (on random spring networks of 5–9 dofs, 990 problems of
 tests/test_problem_solve.py's kinds with fresh seeds, a third of them built to hold dependent
-or touching rows: 21 refused so, none answered wrong).
+or touching rows: 17 refused so, none answered wrong).
 
 Errors. Each solve stops where its residual is within RTOL (1e-10) of its own right-hand side,
 a correction of a refinement (:func:`set_solve`) within CORRECTION_RTOL (1e-6) of its own:
@@ -67,7 +68,7 @@ MAX_COARSE = 500  # unknowns of the coarsest level, at most where the aggregatio
 # on the 1 908 unknowns of the sphere's coarsest level at 32 550 dofs, Cholesky 0.1 s)
 MODE_RTOL = 1e-8  # a rigid-body mode is kept where |K b| is at most this of |K||b|
 UNMET = 1e-8  # a held row that misses its gap by more than this of its terms: a dependent
-# set whose gaps conflict (:func:`held_gaps_met`)
+# set whose gaps conflict (:func:`unmet_rows`)
 PROJECTED = 1e-13  # a projected right-hand side below this of the unprojected one: round-off
 KEPT_SETS = 2  # the sets' factors of C_A C_Aᵀ kept (the loop's last and the check's)
 
@@ -205,13 +206,13 @@ def _Operator(n: int, matvec: Any) -> Any:
     return spla.LinearOperator((n, n), matvec=matvec, dtype=float)
 
 
-def _gram(model: SparseModel, rows: np.ndarray) -> tuple[np.ndarray, Any, np.ndarray]:
+def _gram(model: SparseModel, rows: np.ndarray, prefer: np.ndarray | None = None
+          ) -> tuple[np.ndarray, Any, np.ndarray]:
     """(the positions in ``rows`` of the rows kept, the factor of their C_A C_Aᵀ and its scale:
     :func:`contactqp.model.saddle.gram_factor`), kept for the last KEPT_SETS sets. Where the
-    rows repeat each other's constraint, an independent subset of them by QR with column
-    pivoting of the scaled C_A C_Aᵀ (dense, up to DEPENDENT_ROWS rows; beyond, a
-    SolverError): the others hold nothing the kept ones do not."""
-    key = rows.tobytes()
+    rows repeat each other's constraint, an independent subset of them (:func:`_independent`,
+    the rows ``prefer`` first): the others hold nothing the kept ones do not."""
+    key = rows.tobytes() + (b"" if prefer is None else b"|" + prefer.tobytes())
     sets = model.cache.sets
     found = sets.get(key)
     if found is None:
@@ -219,7 +220,7 @@ def _gram(model: SparseModel, rows: np.ndarray) -> tuple[np.ndarray, Any, np.nda
 
         kept, gram = np.arange(rows.size), gram_factor(model.C[rows])
         if gram is None:
-            kept = _independent(model, rows)
+            kept = _independent(model, rows, prefer)
             gram = gram_factor(model.C[rows[kept]])
             if gram is None:
                 raise SolverError(f"the {rows.size} rows held repeat each other's constraint "
@@ -232,12 +233,15 @@ def _gram(model: SparseModel, rows: np.ndarray) -> tuple[np.ndarray, Any, np.nda
 
 
 DEPENDENT_ROWS = 4000  # rows up to which a dependent set is reduced by a dense QR (128 MB)
-INDEPENDENT_RTOL = 1e-10  # R's diagonal below this of its first: a dependent row
+INDEPENDENT_RTOL = 1e-10  # R's diagonal below this of its column: a dependent row
 
 
-def _independent(model: SparseModel, rows: np.ndarray) -> np.ndarray:
-    """The positions in ``rows`` of an independent subset of them (rank-revealing QR of their
-    scaled C_A C_Aᵀ)."""
+def _independent(model: SparseModel, rows: np.ndarray, prefer: np.ndarray | None = None
+                 ) -> np.ndarray:
+    """The positions in ``rows`` of an independent subset of them: QR of their scaled
+    C_A C_Aᵀ, its columns in the order ``prefer`` (rows), then the others, each kept where it
+    is not within INDEPENDENT_RTOL of the span of those before it (a greedy choice, in that
+    order); up to DEPENDENT_ROWS rows, beyond a SolverError."""
     if rows.size > DEPENDENT_ROWS:
         raise SolverError(f"the {rows.size} rows held repeat each other's constraint: "
                           f"engine='amg' reduces such sets up to {DEPENDENT_ROWS} rows "
@@ -247,10 +251,14 @@ def _independent(model: SparseModel, rows: np.ndarray) -> np.ndarray:
     C_A = model.C[rows]
     gram = (C_A @ C_A.T).toarray()
     scale = 1.0 / np.sqrt(np.diagonal(gram))
-    _, R, order = scipy.linalg.qr(scale[:, None] * gram * scale[None, :], pivoting=True,
-                                  mode="economic")
-    rank = int(np.count_nonzero(np.abs(np.diagonal(R)) > INDEPENDENT_RTOL * abs(R[0, 0])))
-    return np.sort(order[:rank])
+    first = np.zeros(rows.size, dtype=bool)
+    if prefer is not None:
+        first[np.isin(rows, prefer)] = True
+    order = np.concatenate((np.flatnonzero(first), np.flatnonzero(~first)))
+    scaled = (scale[:, None] * gram * scale[None, :])[:, order]
+    R = scipy.linalg.qr(scaled, mode="r")[0]
+    own = np.linalg.norm(scaled, axis=0)
+    return np.sort(order[np.abs(np.diagonal(R)) > INDEPENDENT_RTOL * own])
 
 
 def redundant(model: SparseModel, rows: np.ndarray) -> bool:
@@ -259,15 +267,16 @@ def redundant(model: SparseModel, rows: np.ndarray) -> bool:
 
 
 def solve_set(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.ndarray,
-              start: np.ndarray | None = None, rtol: float = RTOL
-              ) -> tuple[np.ndarray, np.ndarray]:
+              start: np.ndarray | None = None, rtol: float = RTOL,
+              prefer: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(u, λ_A) with K u + C_Aᵀλ_A = force and C_A u = gap, by projected conjugate gradients
-    (module docstring) to ``rtol``, started from ``start`` (projected onto the rows' gaps)."""
+    (module docstring) to ``rtol``, started from ``start`` (projected onto the rows' gaps);
+    where the rows are dependent, the rows ``prefer`` held first (:func:`_independent`)."""
     engine: AmgK = model.factor
     if not rows.size:
         return engine.cg(_Operator(model.n_free, engine.K.dot), force,
                          engine.hierarchy.aspreconditioner(cycle="V"), start, rtol), np.zeros(0)
-    kept, factor, scale = _gram(model, rows)
+    kept, factor, scale = _gram(model, rows, prefer)
     C_A = model.C[rows[kept]]
     C_At = C_A.T
     gap = gap[kept]  # the others' gaps: met where the kept rows' are
@@ -295,12 +304,13 @@ def solve_set(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.n
     return u, lam
 
 
-def held_gaps_met(model: SparseModel, rows: np.ndarray, u: np.ndarray) -> bool:
-    """Whether u meets every held row's gap to UNMET of the row's terms |C_A||u| + |g_A|: a
-    dependent set is solved on an independent subset of its rows (:func:`solve_set`), and the
-    rows left out miss their gaps where the set's gaps conflict."""
+def unmet_rows(model: SparseModel, rows: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """The held rows whose gap u misses by more than UNMET of the row's terms |C_A||u| +
+    |g_A|: a dependent set is solved on an independent subset of its rows
+    (:func:`solve_set`), and the rows left out miss their gaps where the set's gaps
+    conflict."""
     C_A, g_A = model.C[rows], model.g[rows]
-    return bool(np.all(np.abs(C_A @ u - g_A) <= UNMET * (abs(C_A) @ np.abs(u) + np.abs(g_A))))
+    return rows[np.abs(C_A @ u - g_A) > UNMET * (abs(C_A) @ np.abs(u) + np.abs(g_A))]
 
 
 def set_solve(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.ndarray
@@ -321,5 +331,5 @@ def on_set(model: SparseModel, active: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return u, lam
 
 
-__all__ = ["CORRECTION_RTOL", "RTOL", "AmgK", "held_gaps_met", "on_set",
-           "redundant", "rigid_body_modes", "set_solve", "solve_set"]
+__all__ = ["CORRECTION_RTOL", "RTOL", "AmgK", "on_set",
+           "redundant", "rigid_body_modes", "set_solve", "solve_set", "unmet_rows"]
