@@ -155,8 +155,15 @@ def test_hostile_engine_requests(hertz_models, monkeypatch):
     assert np.linalg.eigvalsh(K).min() < 0
     indefinite = contactqp.Problem(sp.csr_array(K), np.ones(3),
                                    sp.csr_array(np.array([[1.0, 0.0, 0.0]])), np.array([1.0]))
-    with pytest.raises(ProblemError, match="K must be positive definite"):
+    with pytest.raises(ProblemError, match="K must be positive definite for engine='amg'"):
         contactqp.solve(indefinite, "lagrange", engine="amg")
+    # a body that only a contact row holds: singular K, which the direct engine solves
+    floating = contactqp.Problem(sp.csr_array(np.array([[1.0, -1.0], [-1.0, 1.0]])),
+                                 np.array([1.0, 0.0]), sp.csr_array(np.array([[-1.0, 0.0]])),
+                                 np.array([0.0]))
+    with pytest.raises(ProblemError, match="solves a singular K whose free modes contact"):
+        contactqp.solve(floating, "lagrange", engine="amg")
+    assert contactqp.solve(floating, "lagrange").verified
     import builtins
 
     real_import = builtins.__import__

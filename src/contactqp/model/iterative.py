@@ -149,9 +149,10 @@ class AmgK:
             np.linalg.cholesky(coarsest.toarray())
         except np.linalg.LinAlgError:
             raise ProblemError(
-                f"K must be positive definite: the coarsest level of its multigrid hierarchy, "
-                f"Pᵀ K P ({coarsest.shape[0]} x {coarsest.shape[0]}), has no Cholesky factor"
-            ) from None
+                f"K must be positive definite for engine='amg': the coarsest level of its "
+                f"multigrid hierarchy, Pᵀ K P ({coarsest.shape[0]} x {coarsest.shape[0]}), has "
+                f"no Cholesky factor (engine='direct' names an indefinite K's pivot, and "
+                f"solves a singular K whose free modes contact rows hold)") from None
         return cls(K, hierarchy, setup_seconds=seconds)
 
     def blocks_pay(self, columns: int) -> bool:
