@@ -159,7 +159,7 @@ def test_hostile_engine_requests(hertz_models, monkeypatch):
         contactqp.solve(indefinite, "lagrange", engine="amg")
     # a body that only a contact row holds: singular K, which the direct engine solves
     floating = contactqp.Problem(sp.csr_array(np.array([[1.0, -1.0], [-1.0, 1.0]])),
-                                 np.array([1.0, 0.0]), sp.csr_array(np.array([[-1.0, 0.0]])),
+                                 np.array([-1.0, 0.0]), sp.csr_array(np.array([[-1.0, 0.0]])),
                                  np.array([0.0]))
     with pytest.raises(ProblemError, match="solves a singular K whose free modes contact"):
         contactqp.solve(floating, "lagrange", engine="amg")
