@@ -137,7 +137,6 @@ class AmgK:
             raise SolverNotAvailable("engine='amg' needs pyamg: pip install contactqp[amg] "
                                      "(or pip install pyamg)") from None
         import time
-
         import warnings
 
         K = sp.csr_matrix(K)
