@@ -256,3 +256,17 @@ def test_an_engine_of_any_other_value_is_one_line(engine):
         with pytest.raises(OptionError, match="engine must be one of direct, amg; got") as err:
             call()
         assert "\n" not in str(err.value) and len(str(err.value)) < 120
+
+
+def test_new_values_get_a_model_of_their_own():
+    """Problem.with_values after an amg solve: the new loads' and gaps' answer, equal to the
+    direct engine's, never the old problem's (a kept amg model once answered the old loads,
+    verified)."""
+    n = 6
+    K = np.diag([2.0] * n) - np.diag([1.0] * (n - 1), 1) - np.diag([1.0] * (n - 1), -1)
+    p = contactqp.Problem(K=sp.csr_array(K), f=np.ones(n), C=sp.csr_array(np.eye(n)[[5]]),
+                          g=np.array([0.5]))
+    contactqp.solve(p, "lagrange", engine="amg")
+    q = p.with_values(f=-np.ones(n), g=np.array([0.1]))
+    by_cg, direct = (contactqp.solve(q, "lagrange", engine=e) for e in ("amg", "direct"))
+    assert np.allclose(by_cg.u, direct.u, atol=1e-9) and np.allclose(direct.u[:3], [-3, -5, -6])

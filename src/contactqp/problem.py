@@ -191,7 +191,8 @@ class Problem:
             A value that is not valid, or gaps that leave no u (one line naming them).
         """
         problem = copy.copy(self)
-        problem.__dict__.pop("_sparse_model", None)  # the model of these values is its own
+        for key in [k for k in problem.__dict__ if k.startswith("_sparse_model")]:
+            problem.__dict__.pop(key)  # the model of these values is its own, every engine's
         # a friction model shares its factorisation with the next values' (K, C, T are kept)
         kept = problem.__dict__.pop("_friction_model", None)
         if kept is not None:
