@@ -38,6 +38,7 @@ from contactqp.cli_input import negative_numbers_joined, validate_out_folder
 from contactqp.errors import ContactqpError
 from contactqp.methods import CONTACT_KINDS, FORMULATIONS, METHODS
 from contactqp.methods.lagrange import ACTIVE_SETS
+from contactqp.model.sparse import ENGINES
 
 
 class _Parser(argparse.ArgumentParser):
@@ -141,7 +142,7 @@ def _solve_command(scene_command: SceneCommand) -> None:
     solve_parser.add_argument("--solver", help="QP solver of the backend, method qp")
     solve_parser.add_argument("--accuracy", choices=("default", "high"), help="method qp")
     solve_parser.add_argument("--scale", choices=("on", "off"), help="non-dimensionalise the QP")
-    solve_parser.add_argument("--engine", default="direct", choices=("direct", "amg"),
+    solve_parser.add_argument("--engine", default="direct", choices=ENGINES,
                               help="a problem file's solves with K: factorised (direct, the "
                                    "default) or conjugate gradients with pyamg's multigrid "
                                    "(amg, for models a factorisation does not fit)")
