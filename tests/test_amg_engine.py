@@ -42,8 +42,8 @@ def test_lagrange_by_conjugate_gradients_is_the_exact_answer(seed, degenerate):
     engine="amg" is verified, and the exact rational answer lies within its bounds (on Cᵀλ
     where rows repeat a constraint): the bounds are measured, not assumed, as each solve is
     inexact. A problem may be refused where the loop settles on dependent rows whose gaps
-    conflict (random_problem(5338, "touching"); with fresh seeds 17 of 990 problems, none
-    answered wrong)."""
+    conflict or comes back to a set it left (random_problem(5338, "touching"); with fresh seeds
+    17 of 990 problems, none answered wrong)."""
     try:
         problem = random_problem(seed, degenerate)
     except ProblemError:  # rows that no u meets: refused when made (tests/test_problem.py)
@@ -56,8 +56,10 @@ def test_lagrange_by_conjugate_gradients_is_the_exact_answer(seed, degenerate):
         pytest.skip("no u meets the rows")
     try:
         result = contactqp.solve(problem, "lagrange", engine="amg")
-    except SolverError as refusal:  # dependent rows with conflicting gaps held at the end
-        assert "gaps that no u meets at once" in str(refusal)
+    except SolverError as refusal:  # dependent rows: conflicting gaps held at the end, or a
+        # set that comes back (both documented in solve_projected; seed 996018 "touching")
+        assert ("gaps that no u meets at once" in str(refusal)
+                or "came back to a set it left (rows that repeat a constraint?)" in str(refusal))
         return
     assert result.options["engine"] == "amg"
     assert assert_within_bounds(result, u, lam), result.summary()
