@@ -181,6 +181,47 @@ def test_hostile_engine_requests(hertz_models, monkeypatch):
         contactqp.solve(fresh, "lagrange", engine="amg")
 
 
+@pytest.mark.parametrize("where", [0, 1502, 2990, 2996])
+def test_an_indefinite_k_the_coarsest_level_misses_is_refused(where, capfd):
+    """A grounded chain of 3 000 unit springs with a 3 x 3 block whose 2 x 2 minors pass but
+    which is indefinite (2I + 1.2 S, S's eigenvalues -2, 1, 1): the coarsest level of its
+    hierarchy factors by Cholesky at these places (a review's example, verified before), the
+    random solve's curvature shows it. The direct engine names its pivot; nothing printed."""
+    n = 3000
+    diagonal = np.full(n, 2.0)
+    diagonal[-1] = 1.0
+    K = sp.diags([diagonal, -np.ones(n - 1), -np.ones(n - 1)], [0, 1, -1]).tolil()
+    K[where:where + 3, where:where + 3] = np.array([[2.0, 1.2, 1.2], [1.2, 2.0, -1.2],
+                                                    [1.2, -1.2, 2.0]])
+    K = sp.csr_array(K)
+    assert np.linalg.eigvalsh(K.toarray()).min() < -0.1
+    f = np.zeros(n)
+    f[-1] = 1.0
+    problem = contactqp.Problem(K, f, sp.csr_array(([1.0], ([0], [n - 1])), shape=(1, n)),
+                                np.array([10.0]))
+    with pytest.raises(ProblemError, match="K must be positive definite for engine='amg'"):
+        contactqp.solve(problem, "lagrange", engine="amg")
+    with pytest.raises(ProblemError, match="negative eigenvalue"):
+        contactqp.solve(problem, "lagrange")
+    assert capfd.readouterr() == ("", "")
+
+
+def test_a_load_the_rows_do_not_hold_is_kept_at_any_stiffness_contrast():
+    """K = diag(10²⁸, 1), the row holding dof 0 at 3 u₀ = −1, a load 10⁻³ on dof 1: u =
+    (−1/3, 10⁻³) by hand. The unheld load is 10⁻³⁰ of the held one's reaction; a test of the
+    projected load's size as a whole called it round-off and answered u₁ = 0, verified (a
+    review's example)."""
+    problem = contactqp.Problem(sp.diags_array([1e28, 1.0]).tocsr(), np.array([0.0, 1e-3]),
+                                sp.csr_array(np.array([[3.0, 0.0]])), np.array([-1.0]))
+    for engine in ("direct", "amg"):
+        result = contactqp.solve(problem, "lagrange", engine=engine)
+        assert result.verified
+        np.testing.assert_allclose(result.u, [-1 / 3, 1e-3], rtol=1e-12)
+        wrong = contactqp.check(problem, np.array([-1 / 3, 0.0]), result.contact_force,
+                                engine=engine)
+        assert not wrong.verified
+
+
 def test_the_engine_prints_nothing_and_leaves_the_problem(capfd):
     """Nothing on stdout or stderr; the problem's arrays unchanged."""
     problem = random_problem(11)
@@ -243,6 +284,12 @@ def test_check_takes_the_engine(hertz_models):
         contactqp.check(contactqp.default_scene(), np.zeros(5), np.zeros(1), engine="amg")
     with pytest.raises(OptionError, match="engine must be one of"):
         contactqp.check(problem, direct.u, direct.contact_force, engine="pcg")
+    # a model is checked with its own engine; another one named: one line, not ignored
+    model = problem_model(problem, "amg")
+    assert contactqp.check(model, direct.u, direct.contact_force, engine="amg").verified
+    with pytest.raises(OptionError, match="this model solves with engine='amg', not "
+                                          "engine='direct'"):
+        contactqp.check(model, direct.u, direct.contact_force)
 
 
 @pytest.mark.parametrize("engine", [None, 3, np.array(["amg"]), ["amg"], "AMG", "amg " * 40])
@@ -272,3 +319,21 @@ def test_new_values_get_a_model_of_their_own():
     q = p.with_values(f=-np.ones(n), g=np.array([0.1]))
     by_cg, direct = (contactqp.solve(q, "lagrange", engine=e) for e in ("amg", "direct"))
     assert np.allclose(by_cg.u, direct.u, atol=1e-9) and np.allclose(direct.u[:3], [-3, -5, -6])
+
+
+def test_rows_past_the_reduced_size_are_redundant_not_an_error(monkeypatch):
+    """DEPENDENT_ROWS + 1 rows on two dofs (DEPENDENT_ROWS lowered to 60 here), no two the same constraint: the check asks whether
+    they repeat each other's constraint (they do: C_A C_Aᵀ has rank 2), and the answer is yes,
+    not the SolverError of the reduction that holds such sets only up to DEPENDENT_ROWS rows
+    (which the solve says)."""
+    monkeypatch.setattr(iterative, "DEPENDENT_ROWS", 60)
+    rows = iterative.DEPENDENT_ROWS + 1
+    angle = np.linspace(0.1, 1.4, rows)
+    C = np.column_stack((np.cos(angle), np.sin(angle)))
+    problem = contactqp.Problem(sp.eye_array(2).tocsr(), np.array([1.0, 1.0]),
+                                sp.csr_array(C), C @ np.array([0.5, 0.5]))
+    model = problem_model(problem, "amg")
+    assert model.redundant(np.arange(rows))
+    assert not model.redundant(np.arange(2))
+    with pytest.raises(SolverError, match=f"reduces such sets up to {rows - 1} rows"):
+        contactqp.solve(problem, "lagrange", engine="amg")

@@ -117,7 +117,8 @@ def check(model: Any, u: Any, contact_force: Any, reactions: Any = None,
     engine : str
         For a Problem: how its model solves with K, "direct" (factorised) or "amg" (conjugate
         gradients with pyamg's multigrid, :mod:`contactqp.model.iterative`), as
-        :func:`contactqp.solve`'s ``engine``; a scene takes "direct" only.
+        :func:`contactqp.solve`'s ``engine``; a model is checked with its own engine (another
+        named is an OptionError); a scene takes "direct" only.
 
     Returns
     -------

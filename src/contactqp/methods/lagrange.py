@@ -41,7 +41,7 @@ from contactqp.model import (
 from contactqp.model.augmented import STEPS
 from contactqp.model.chain.to_problem import problem_from_scene
 from contactqp.model.factor import CholmodK
-from contactqp.model.iterative import AmgK, solve_set, unmet_rows
+from contactqp.model.iterative import CORRECTION_RTOL, UNMET, AmgK, redundant, solve_set, unmet_rows
 from contactqp.model.saddle import (  # noqa: F401 - banded_order, row_scale: their former place
     banded_order,
     row_scale,
@@ -436,12 +436,17 @@ def solve_projected(model, contact: str, *, max_iterations: int | None = None) -
                 prefer = unmet  # the same set again, those held first
                 continue
             if unmet.size:
-                raise SolverError(f"lagrange: the {rows.size} rows held repeat each other's "
-                                  "constraint with gaps that no u meets at once: engine='amg' "
-                                  "holds an independent subset and does not choose which "
-                                  "rows to let go (engine='direct' does)")
+                why = ("repeat each other's constraint with gaps that no u meets at once: "
+                       "engine='amg' holds an independent subset and does not choose which "
+                       "rows to let go" if redundant(model, rows) else
+                       "are independent, yet nearly repeat each other's constraint: their "
+                       "projection leaves gaps unmet")
+                raise SolverError(f"lagrange: the {rows.size} rows held {why} ({unmet.size} "
+                                  f"missed by more than {UNMET:g} of their terms; "
+                                  "engine='direct' takes them)")
             residual = model.K @ u - model.P + model.C.T @ lam
-            du, dlam = model.set_solve(rows, residual, model.C[rows] @ u - model.g[rows])
+            du, dlam = solve_set(model, rows, residual, model.C[rows] @ u - model.g[rows],
+                                 rtol=CORRECTION_RTOL, prefer=prefer)  # the subset it settled on
             u, lam[rows] = u - du, lam[rows] - dlam
             return Solution(u, lam, solver="lagrange", iterations=iteration,
                             info={"active_set": "primal-dual", "engine": "amg",

@@ -42,14 +42,17 @@ CORRECTION_RTOL), and the refinement's tail of corrections is its bound
 a SolverError.
 
 Definiteness. A factorisation's pivots prove K positive definite or not (Sylvester); this
-engine's evidence is weaker: the coarsest level's Galerkin matrix Pᵀ K P, which is positive
-definite where K is, must factor by Cholesky (an indefinite K is refused where that fails), and
-each solve must converge. An indefinite K whose negative directions the coarsest level misses
-is not proved so here: the direct engine proves it.
+engine's evidence is weaker, of two kinds: the coarsest level's Galerkin matrix Pᵀ K P, which
+is positive definite where K is, must factor by Cholesky, and conjugate gradients preconditioned
+by the hierarchy must solve K x = b for a random b to RTOL with every curvature positive
+(:func:`_curvature`: an indefinite K fails it but for a chance of about RTOL·√n). An indefinite
+K is refused where either fails; the direct engine proves it and names the pivot.
 """
 
 from __future__ import annotations
 
+import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -69,7 +72,7 @@ MAX_COARSE = 500  # unknowns of the coarsest level, at most where the aggregatio
 MODE_RTOL = 1e-8  # a rigid-body mode is kept where |K b| is at most this of |K||b|
 UNMET = 1e-8  # a held row that misses its gap by more than this of its terms: a dependent
 # set whose gaps conflict (:func:`unmet_rows`)
-PROJECTED = 1e-13  # a projected right-hand side below this of the unprojected one: round-off
+PROJECTED = 1e-13  # a projected right-hand side's component below this of its terms: round-off
 KEPT_SETS = 2  # the sets' factors of C_A C_Aᵀ kept (the loop's last and the check's)
 
 
@@ -119,13 +122,14 @@ class AmgK:
     K : K on the free dofs (CSR).
     hierarchy : pyamg's smoothed-aggregation hierarchy of K.
     iterations : the conjugate-gradient iterations of each solve so far.
-    setup_seconds : the hierarchy's set-up time.
+    setup_seconds : the hierarchy's set-up time with its test of definiteness.
     """
 
     K: sp.csr_matrix
     hierarchy: Any
     iterations: list[int] = field(default_factory=list)
     setup_seconds: float = 0.0
+    _magnitude: sp.csr_matrix | None = field(default=None, repr=False)
 
     @classmethod
     def of(cls, K: sp.spmatrix, modes: np.ndarray | None) -> AmgK:
@@ -136,9 +140,6 @@ class AmgK:
         except ImportError:
             raise SolverNotAvailable("engine='amg' needs pyamg: pip install contactqp[amg] "
                                      "(or pip install pyamg)") from None
-        import time
-        import warnings
-
         K = sp.csr_matrix(K)
         K.sort_indices()
         start = time.perf_counter()
@@ -147,7 +148,6 @@ class AmgK:
             warnings.simplefilter("ignore")
             hierarchy = pyamg.smoothed_aggregation_solver(K, B=modes, max_coarse=MAX_COARSE,
                                                           coarse_solver="cholesky")
-        seconds = time.perf_counter() - start
         coarsest = hierarchy.levels[-1].A
         try:
             if not np.isfinite(coarsest.data).all():
@@ -159,7 +159,22 @@ class AmgK:
                 f"multigrid hierarchy, Pᵀ K P ({coarsest.shape[0]} x {coarsest.shape[0]}), has "
                 f"no Cholesky factor (engine='direct' names an indefinite K's pivot, and "
                 f"solves a singular K whose free modes contact rows hold)") from None
-        return cls(K, hierarchy, setup_seconds=seconds)
+        met = _curvature(K, hierarchy)
+        if met:
+            raise ProblemError(
+                f"K must be positive definite for engine='amg': conjugate gradients on K x = b "
+                f"(b random, {K.shape[0]} free dofs) {met} (engine='direct' names an "
+                f"indefinite K's pivot, and solves a singular K whose free modes contact rows "
+                f"hold)")
+        return cls(K, hierarchy, setup_seconds=time.perf_counter() - start)
+
+    @property
+    def magnitude(self) -> sp.csr_matrix:
+        """|K| (kept; its index arrays K's own): the terms of a product with K."""
+        if self._magnitude is None:
+            self._magnitude = sp.csr_matrix((np.abs(self.K.data), self.K.indices,
+                                             self.K.indptr), shape=self.K.shape)
+        return self._magnitude
 
     def blocks_pay(self, columns: int) -> bool:
         """Never (CholmodK's question): conjugate gradients solve a column at a time."""
@@ -202,9 +217,32 @@ class AmgK:
             residual = float(np.linalg.norm(rhs - operator.matvec(x))) / size
             raise SolverError(f"conjugate gradients (engine='amg') did not converge: "
                               f"{steps[0]} iterations left a relative residual {residual:.1e} "
-                              f"(K singular or not positive definite? engine='direct' "
-                              f"says which)")
+                              f"(K singular, or rows held that nearly repeat each other's "
+                              f"constraint? engine='direct' says which)")
         return x
+
+
+def _curvature(K: sp.csr_matrix, hierarchy: Any) -> str:
+    """What shows K not positive definite, or "": pyamg's conjugate gradients, preconditioned
+    by the hierarchy's V-cycle, on K x = b for b random (the seed fixed), to RTOL, stop where a
+    curvature pᵀKp or rᵀMr is negative (pyamg reports -1). Why this is evidence: with M positive
+    definite (the V-cycle of a positive definite K with symmetric smoothing is), the iteration is
+    Lanczos on M^-½KM^-½; while every curvature is positive its residual polynomial has only
+    positive roots and p(0) = 1, so along an eigenvector of a negative eigenvalue |p| > 1 and the
+    residual keeps b's component there: the solve converges to RTOL only where that component is
+    under about RTOL of |b|, a chance of about RTOL·√n for a random b (10⁻⁷ at 10⁶ dofs)."""
+    from pyamg.krylov import cg
+
+    b = np.random.default_rng(0).standard_normal(K.shape[0])
+    # recorded, so never printed: pyamg's cg sets its own filter to "always"
+    with np.errstate(all="ignore"), warnings.catch_warnings(record=True):
+        x, info = cg(K, b, tol=RTOL, maxiter=MAX_ITERATIONS,
+                     M=hierarchy.aspreconditioner(cycle="V"))
+    if info < 0:
+        return "met a direction of negative curvature"
+    if info > 0 or not np.isfinite(x).all():
+        return f"did not converge in {MAX_ITERATIONS} iterations"
+    return ""
 
 
 def _Operator(n: int, matvec: Any) -> Any:
@@ -269,8 +307,12 @@ def _independent(model: SparseModel, rows: np.ndarray, prefer: np.ndarray | None
 
 
 def redundant(model: SparseModel, rows: np.ndarray) -> bool:
-    """Whether the rows repeat each other's constraint (C_A C_Aᵀ singular)."""
-    return bool(rows.size) and _gram(model, rows)[0].size < rows.size
+    """Whether the rows repeat each other's constraint (C_A C_Aᵀ singular; so too where its
+    independent subset is not found, :func:`_gram`'s SolverError)."""
+    try:
+        return bool(rows.size) and _gram(model, rows)[0].size < rows.size
+    except SolverError:
+        return True
 
 
 def solve_set(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.ndarray,
@@ -295,14 +337,22 @@ def solve_set(model: SparseModel, rows: np.ndarray, force: np.ndarray, gap: np.n
         return x - C_At @ gram_solve(C_A @ x)
 
     cycle = engine.hierarchy.aspreconditioner(cycle="V")
-    particular = C_At @ gram_solve(gap)
+    lifted = gram_solve(gap)
+    particular = C_At @ lifted
     operator = _Operator(model.n_free, lambda z: project(engine.K @ project(z)))
     preconditioner = _Operator(model.n_free, lambda r: project(cycle.matvec(project(r))))
     unheld = force - engine.K @ particular
-    rhs = project(unheld)
-    if kept.size >= model.n_free or np.linalg.norm(rhs) <= PROJECTED * np.linalg.norm(unheld):
-        u = particular  # the rows hold every dof (what is left is the projection's round-off)
+    held = gram_solve(C_A @ unheld)
+    rhs = unheld - C_At @ held
+    # a component within the round-off of the terms it is made of is nothing (per dof: a load
+    # the rows do not hold can be 10⁻³⁰ of one they do where K's stiffnesses differ so)
+    reach = np.abs(particular) + abs(C_At) @ np.abs(lifted)  # u_p's components and their terms
+    terms = np.abs(force) + engine.magnitude @ reach + abs(C_At) @ np.abs(held)
+    rhs[np.abs(rhs) <= PROJECTED * terms] = 0.0
+    if kept.size >= model.n_free or not rhs.any():
+        u = particular  # the rows hold every dof, or the load they do not hold is round-off
     else:
+        rhs = project(rhs)  # in the null space again (the round-off removed is of its size)
         z = engine.cg(operator, rhs, preconditioner,
                       None if start is None else project(start - particular), rtol)
         u = particular + project(z)
@@ -338,5 +388,5 @@ def on_set(model: SparseModel, active: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return u, lam
 
 
-__all__ = ["CORRECTION_RTOL", "RTOL", "AmgK", "on_set",
+__all__ = ["CORRECTION_RTOL", "RTOL", "UNMET", "AmgK", "on_set",
            "redundant", "rigid_body_modes", "set_solve", "solve_set", "unmet_rows"]

@@ -421,9 +421,14 @@ def check_engine(engine: Any) -> None:
 
 
 def as_sparse_model(value: Any, engine: str = "direct") -> SparseModel:
-    """``value`` if it is a SparseModel, the kept model of a Problem (by ``engine``); an
-    OptionError for anything else."""
+    """``value`` if it is a SparseModel of that engine, the kept model of a Problem (by
+    ``engine``); an OptionError for anything else, a model of another engine included."""
+    check_engine(engine)
     if isinstance(value, SparseModel):
+        if value.engine != engine:
+            raise OptionError(f"this model solves with engine={value.engine!r}, not "
+                              f"engine={engine!r}: pass engine={value.engine!r}, or its "
+                              f"problem (model.problem) to have it solved with {engine!r}")
         return value
     if isinstance(value, Problem):
         return problem_model(value, engine)
