@@ -356,3 +356,46 @@ def test_a_k_cholespy_refuses_leaves_the_solves_to_cholmod_and_prints_nothing(ca
         <= 1e-12 * np.abs(W).max()
     printed = capfd.readouterr()
     assert printed.out == "" and printed.err == ""
+
+
+@pytest.mark.parametrize("side", [15, 30])
+def test_the_factors_planned_size_is_the_factors_own(side):
+    """What the guard below reads from CHOLMOD's analysis: on a 2D grid Laplacian the column
+    counts' sum equals the nonzeros of the numeric factor CHOLMOD then computes (cvxopt's
+    getfactor), and the supernodes store at least those; a chain fills nothing (2n − 1) and a
+    full matrix everything (n(n + 1)/2)."""
+    from cvxopt import cholmod
+
+    T = sp.diags([4.0 * np.ones(side), -np.ones(side - 1), -np.ones(side - 1)], [0, 1, -1])
+    K = sp.csc_matrix(sp.kronsum(T, T))
+    analysis = factor_module.Cholmod.of_pattern(K)
+    count, stored = analysis.entries()
+    analysis.factor("K", factor_module.lower_triangle(K)[2].astype(float))
+    values = np.array(cholmod.getfactor(analysis.symbolic).V).reshape(-1)
+    assert count == np.count_nonzero(values) and stored >= values.size
+    n = 40
+    chain = sp.csc_matrix(sp.diags([2.0 * np.ones(n), -np.ones(n - 1), -np.ones(n - 1)],
+                                   [0, 1, -1]))
+    assert factor_module.Cholmod.of_pattern(chain).entries()[0] == 2 * n - 1
+    full = factor_module.Cholmod.of_pattern(sp.csc_matrix(np.ones((n, n))))
+    assert full.entries()[0] == n * (n + 1) // 2
+
+
+def test_a_factor_past_the_memory_available_is_one_line(monkeypatch, capfd):
+    """Where the factor CHOLMOD plans needs more memory than the machine has, a SolverError
+    naming both and engine='amg', before the numeric factorisation (at 1.1·10⁶ dofs in 3D it
+    was killed by the kernel: 26.6 GB planned on 24 GB). The memory is lowered here."""
+    n = 200
+    f = np.zeros(n)
+    f[-1] = 1.0
+    problem = contactqp.Problem(spring_chain(n, np.random.default_rng(0)), f,
+                                sp.csr_array(([1.0], ([0], [n - 1])), shape=(1, n)),
+                                np.array([1e-3]))
+    monkeypatch.setattr(factor_module, "available_memory", lambda: 1000)
+    with pytest.raises(contactqp.SolverError,
+                       match=r"K's Cholesky factor \(\d+ dofs\) needs .* GB .* this machine has "
+                             r"0\.0 GB available: engine='amg'"):
+        contactqp.solve(problem, "lagrange")
+    assert capfd.readouterr() == ("", "")
+    monkeypatch.setattr(factor_module, "available_memory", lambda: None)
+    assert contactqp.solve(problem.with_values(f=problem.f), "lagrange").verified
