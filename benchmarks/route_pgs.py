@@ -4,9 +4,9 @@
     python benchmarks/route_pgs.py [--approach 0.04] [--cache DIR]
 
 Takes the 2D rows sweep's cylinder of benchmarks/scale.py (330 752 dofs, 10 272 rows; at the
-default δ = 40 µm every row of the zone is in contact), lifts, for this run only, the limits
-pgs keeps so that a run ends in about a minute (LCP_ROWS, the rows it forms W for, and
-PGS_WORK, its sweeps x rows²), and runs ``contactqp.solve(problem, "pgs")`` to PGS's own
+default δ = 40 µm every row of the zone is in contact) and runs ``contactqp.solve(problem,
+"pgs", max_rows=rows)``: the option lifts the limits pgs keeps so that a run ends in about a
+minute (LCP_ROWS, the rows it forms W for, and PGS_WORK, its sweeps x rows²), to PGS's own
 tolerance or its 10 000 sweeps. Prints the time W took (a solve per row, through the model's
 factor), the sweeps, the whole time, the check's verdict, and the largest difference from
 lagrange's contact forces over their largest. Needs about 3 GB beside the model.
@@ -43,16 +43,14 @@ def main() -> None:
     seconds = {}
     form = complementarity.contact_lcp
 
-    def timed_lcp(model):
+    def timed_lcp(model, max_rows=None):
         start = time.perf_counter()
-        found = form(model)
+        found = form(model, max_rows)
         seconds["W"] = time.perf_counter() - start
         return found
 
     complementarity.contact_lcp = timed_lcp  # the time W takes, apart from the sweeps
-    complementarity.LCP_ROWS = max(complementarity.LCP_ROWS, rows)
-    complementarity.PGS_WORK = complementarity.PGS_MAX_ITERATIONS * rows**2
-    result = contactqp.solve(problem, "pgs")
+    result = contactqp.solve(problem, "pgs", max_rows=rows)
     force = exact.contact_force
     difference = np.abs(result.contact_force - force).max() / np.abs(force).max()
     print(f"pgs: {result.time:.1f} s in all, W {seconds['W']:.1f} s, {result.iterations} "

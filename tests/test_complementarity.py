@@ -315,3 +315,37 @@ def test_the_lcp_of_a_users_model_keeps_no_columns_past_their_size(method, monke
     else:
         with pytest.raises(contactqp.ContactqpError, match="and 1 entries"):
             contactqp.solve(fresh, method)
+
+
+def test_pgs_past_its_rows_by_its_option(monkeypatch, capfd):
+    """pgs refuses past LCP_ROWS (set to 10 here) with the reason and the option that lifts
+    it; with max_rows at the problem's rows it forms W, sweeps past PGS_WORK's budget (set so
+    it allows one sweep here) and is verified, its forces within their bounds of lagrange's;
+    a W that would not fit in the memory available is one line; a max_rows under the rows
+    refuses as the default does; bad values of max_rows are one line; nothing printed."""
+    pytest.importorskip("skfem")
+    from contactqp.fem import cylinder_on_flat
+    from contactqp.methods import complementarity
+    from contactqp.model import factor
+
+    problem = cylinder_on_flat(fine=0.05).problem
+    rows = problem.C.shape[0]
+    assert rows > 10
+    monkeypatch.setattr(complementarity, "LCP_ROWS", 10)
+    monkeypatch.setattr(complementarity, "PGS_WORK", rows**2)
+    with pytest.raises(contactqp.SolverError, match="up to 10 contact rows.*option max_rows"):
+        contactqp.solve(problem, "pgs")
+    with pytest.raises(contactqp.SolverError, match=f"up to {rows - 1} contact rows"):
+        contactqp.solve(problem, "pgs", max_rows=rows - 1)
+    exact = contactqp.solve(problem, "lagrange")
+    found = contactqp.solve(problem, "pgs", max_rows=rows)
+    assert found.verified and found.iterations > 1
+    reach = found.force_error_bound + exact.force_error_bound
+    assert np.abs(found.contact_force - exact.contact_force).max() <= reach
+    monkeypatch.setattr(factor, "available_memory", lambda: 3 * 8 * rows**2 - 1)
+    with pytest.raises(contactqp.SolverError, match=f"pgs with {rows} rows forms W"):
+        contactqp.solve(problem, "pgs", max_rows=rows)
+    for bad in (0, -3, 2.5, True, "many", float("nan"), None, [rows]):
+        with pytest.raises(contactqp.OptionError, match="max_rows must be a whole number"):
+            contactqp.solve(problem, "pgs", max_rows=bad)
+    assert capfd.readouterr() == ("", "")

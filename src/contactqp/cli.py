@@ -130,6 +130,9 @@ def _solve_command(scene_command: SceneCommand) -> None:
                                    "λ), pgs and semismooth_newton (natural-map residual)")
     solve_parser.add_argument("--max-iterations", type=int, dest="max_iterations",
                               help="steps, sweeps or pivots at most (every method but qp)")
+    solve_parser.add_argument("--max-rows", type=int, dest="max_rows",
+                              help="method pgs: the rows up to which it forms W (default 2000; "
+                                   "more is a long run)")
     solve_parser.add_argument("--active-set", dest="active_set", choices=ACTIVE_SETS,
                               help="method lagrange: the hull's active set (default where it "
                                    "applies) or the rows passed, added one step at a time")
@@ -174,8 +177,8 @@ def _curve_command(scene_command: SceneCommand) -> None:
                               help="print the curves as JSON (instead of the table and the chart)")
 
 
-NUMBER_OPTIONS = ("--penalty", "--relaxation", "--tolerance", "--max-iterations", "--gamma0",
-                  "--theta", "--steps")
+NUMBER_OPTIONS = ("--penalty", "--relaxation", "--tolerance", "--max-iterations", "--max-rows",
+                  "--gamma0", "--theta", "--steps")
 
 
 def _writes_charts(args: argparse.Namespace) -> bool:

@@ -123,8 +123,8 @@ def _qp_options(args: argparse.Namespace) -> dict[str, Any]:
 
 def command_solve(args: argparse.Namespace) -> int:
     options: dict[str, Any] = {}
-    for name in ("penalty", "relaxation", "ncp", "tolerance", "max_iterations", "active_set",
-                 "gamma0", "theta"):
+    for name in ("penalty", "relaxation", "ncp", "tolerance", "max_iterations", "max_rows",
+                 "active_set", "gamma0", "theta"):
         if getattr(args, name) is not None:
             options[name] = getattr(args, name)
     options.update(_qp_options(args))

@@ -119,7 +119,9 @@ def solve(scene: Scene | Problem | str | os.PathLike | None = None, method: str 
         the backend's default), ``accuracy`` ("default" or "high"), ``scale`` (default
         True), ``verbose`` (default False): see :mod:`contactqp.methods.qp`. "lemke":
         ``max_iterations`` (pivots). "pgs": ``relaxation`` (ω in (0, 2), default 1),
-        ``tolerance``, ``max_iterations``. "semismooth_newton": ``ncp`` ("min" or
+        ``tolerance``, ``max_iterations``, ``max_rows`` (default 2 000: the rows up to which
+        it forms W; more lifts its limits for a long run, 14 minutes at 10⁴ rows).
+        "semismooth_newton": ``ncp`` ("min" or
         "fischer-burmeister"), ``tolerance``, ``max_iterations``. "nitsche": ``gamma0``
         (default 100), ``theta`` (1, 0 or −1), ``max_iterations``.
 

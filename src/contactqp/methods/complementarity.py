@@ -62,24 +62,27 @@ ARMIJO = 1e-4  # sufficient decrease of ½‖Φ‖² along the Newton step
 HELD_OPEN = 1e-9  # a held row left open by more than this (of q's largest entry) is let go
 
 
-def contact_lcp(problem: Model | Condensed | ContactModel
+def contact_lcp(problem: Model | Condensed | ContactModel, max_rows: int | None = None
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
-    """(W, q, K⁻¹P, K⁻¹Cᵀ) of a problem (module docstring); a SolverError past LCP_ROWS, or
-    past LCP_ENTRIES of K⁻¹Cᵀ where the model cannot form W in blocks
-    (``flexibility_in_blocks``); a model that can forms W a block of rows at a time and gives
-    None for K⁻¹Cᵀ, and the answer's u is then one solve (:func:`_answer`)."""
+    """(W, q, K⁻¹P, K⁻¹Cᵀ) of a problem (module docstring); a SolverError past ``max_rows``
+    rows (LCP_ROWS unless pgs is asked for more), or past LCP_ENTRIES of K⁻¹Cᵀ where the model
+    cannot form W in blocks (``flexibility_in_blocks``); a model that can forms W a block of
+    rows at a time and gives None for K⁻¹Cᵀ, and the answer's u is then one solve
+    (:func:`_answer`)."""
     rows = problem.n_contacts
-    if _past_lcp(problem):
+    max_rows = LCP_ROWS if max_rows is None else max_rows
+    if _past_lcp(problem, max_rows):
         # a user's problem has dofs, a bar scene nodes: the refusal speaks the caller's words
         what, unknowns = (("problem", "free dofs") if problem.layout is None
                           else ("scene", "free nodes"))
         if problem.flexibility_in_blocks:
             raise SolverError(f"the complementarity methods form the dense flexibility "
-                              f"W = C K⁻¹ Cᵀ (rows x rows, a solve per row): up to {LCP_ROWS} "
+                              f"W = C K⁻¹ Cᵀ (rows x rows, a solve per row): up to {max_rows} "
                               f"contact rows; this {what} has {rows} contact rows (use "
-                              f"lagrange or semismooth_newton)")
+                              f"lagrange or semismooth_newton; pgs takes more with its option "
+                              f"max_rows, at minutes to hours a run)")
         raise SolverError(f"the complementarity methods form the dense flexibility W = C K⁻¹ Cᵀ "
-                          f"(rows x rows) and K⁻¹Cᵀ: up to {LCP_ROWS} contact rows and "
+                          f"(rows x rows) and K⁻¹Cᵀ: up to {max_rows} contact rows and "
                           f"{LCP_ENTRIES} entries; this {what} has {rows} contact rows and "
                           f"{problem.n_free} {unknowns} (use lagrange)")
     u_free = problem.free_displacement
@@ -99,10 +102,11 @@ def flexibility(problem: Model | Condensed) -> tuple[np.ndarray, np.ndarray]:
     return columns, 0.5 * (W + W.T)
 
 
-def _answer(problem: Model | Condensed, contact: str, solver: str, z_solver) -> Solution:
+def _answer(problem: Model | Condensed, contact: str, solver: str, z_solver,
+            max_rows: int | None = None) -> Solution:
     """The Solution from the LCP's λ (``z_solver(M, q̃) -> (z, iterations, converged, status,
     info)`` on the scaled problem); equality contact by one linear solve."""
-    W, q, u_free, columns = contact_lcp(problem)
+    W, q, u_free, columns = contact_lcp(problem, max_rows)
     if contact == "equality":
         # least squares: rows that repeat each other's constraint leave W singular, and the
         # least-norm forces are as good as any (an inconsistent set is named by the caller)
@@ -149,9 +153,12 @@ def solve_lemke(problem: Model | Condensed, contact: str, *,
     return _answer(problem, contact, "lemke", pivots)
 
 
-def pgs_sweeps(rows: int, max_iterations: int | None) -> int:
+def pgs_sweeps(rows: int, max_iterations: int | None, lifted: bool = False) -> int:
     """The sweeps PGS may take on ``rows`` rows: ``max_iterations``, or by default
-    PGS_MAX_ITERATIONS, within PGS_WORK (an OptionError where a given number is past it)."""
+    PGS_MAX_ITERATIONS, within PGS_WORK (an OptionError where a given number is past it);
+    ``lifted`` (pgs asked for more rows than LCP_ROWS): the work is the caller's choice."""
+    if lifted:
+        return PGS_MAX_ITERATIONS if max_iterations is None else max_iterations
     budget = max(1, PGS_WORK // max(rows, 1) ** 2)
     if max_iterations is None:
         return min(PGS_MAX_ITERATIONS, budget)
@@ -163,13 +170,20 @@ def pgs_sweeps(rows: int, max_iterations: int | None) -> int:
 
 
 def solve_pgs(problem: Model | Condensed, contact: str, *, relaxation: float = 1.0,
-              tolerance: float = PGS_TOLERANCE,
-              max_iterations: int | None = None) -> Solution:
+              tolerance: float = PGS_TOLERANCE, max_iterations: int | None = None,
+              max_rows: int | None = None) -> Solution:
     """Projected Gauss–Seidel (``relaxation`` 1) or PSOR (module docstring); the iterate at
     the last sweep, with ``claimed_success`` False, when ``max_iterations`` sweeps (default
     PGS_MAX_ITERATIONS, within PGS_WORK: :func:`pgs_sweeps`) do not bring the residual under
-    ``tolerance``."""
-    max_iterations = pgs_sweeps(problem.n_contacts, max_iterations)
+    ``tolerance``. ``max_rows``: the rows up to which W is formed (default LCP_ROWS, so that a
+    run ends in about a minute); asked past LCP_ROWS, PGS_WORK no longer bounds the sweeps
+    (the caller chose a long run: 14 minutes at 10⁴ rows, docs/benchmarks.md), and W must fit
+    in the memory available (:func:`w_fits`)."""
+    max_rows = LCP_ROWS if max_rows is None else max_rows
+    lifted = max_rows > LCP_ROWS
+    max_iterations = pgs_sweeps(problem.n_contacts, max_iterations, lifted)
+    if lifted and problem.n_contacts > LCP_ROWS:
+        w_fits(problem.n_contacts)
 
     def sweeps(M: np.ndarray, q: np.ndarray):
         z = np.zeros(q.size)
@@ -182,7 +196,22 @@ def solve_pgs(problem: Model | Condensed, contact: str, *, relaxation: float = 1
         return (z, max_iterations, False, f"stopped after {max_iterations} sweeps",
                 {"relaxation": relaxation})
 
-    return _answer(problem, contact, "pgs", sweeps)
+    return _answer(problem, contact, "pgs", sweeps, max_rows)
+
+
+W_COPIES = 3  # dense rows x rows arrays the LCP holds at once (W, its scaled M, a product)
+
+
+def w_fits(rows: int) -> None:
+    """A SolverError where W_COPIES dense rows x rows arrays need more memory than the machine
+    has available (:func:`contactqp.model.factor.available_memory`)."""
+    from contactqp.model.factor import available_memory
+
+    needed, available = W_COPIES * 8 * rows**2, available_memory()
+    if available is not None and needed > available:
+        raise SolverError(f"pgs with {rows} rows forms W (rows x rows) and needs about "
+                          f"{needed / 1e9:.1f} GB; this machine has {available / 1e9:.1f} GB "
+                          "available (use lagrange or semismooth_newton)")
 
 
 def solve_semismooth_newton(problem: Model | Condensed, contact: str, *, ncp: str = "min",
@@ -254,11 +283,11 @@ def solve_semismooth_newton(problem: Model | Condensed, contact: str, *, ncp: st
     return _answer(problem, contact, "semismooth_newton", newton)
 
 
-def _past_lcp(problem: ContactModel) -> bool:
-    """Whether the LCP is past what :func:`contact_lcp` forms (W dense, and K⁻¹Cᵀ dense
-    where the model does not form W in blocks)."""
+def _past_lcp(problem: ContactModel, max_rows: int | None = None) -> bool:
+    """Whether the LCP is past what :func:`contact_lcp` forms (W dense, up to ``max_rows``
+    rows, LCP_ROWS by default, and K⁻¹Cᵀ dense where the model does not form W in blocks)."""
     rows = problem.n_contacts
-    return rows > LCP_ROWS or (not problem.flexibility_in_blocks
+    return rows > (LCP_ROWS if max_rows is None else max_rows) or (not problem.flexibility_in_blocks
                                and problem.n_free * rows > LCP_ENTRIES)
 
 
