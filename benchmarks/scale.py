@@ -9,13 +9,15 @@ Models (contactqp.fem, scikit-fem; R = 10 mm, E = 210 GPa, ν = 0.3, contact zon
     dofs2d  the Hertz cylinder pushed down by δ = 10 µm (a ≈ 0.41 of the zone: the contact
             fraction fixed) on meshes refined in fine and growth together, 10⁴ to 9·10⁵ dofs
     dofs3d  the Hertz sphere, δ = 10 µm (a ≈ 0.63 of the zone), on the levels of
-            benchmarks/hertz3d.py, 1.3·10⁴ to 9·10⁴ dofs
+            benchmarks/hertz3d.py, 5·10³ to 2.4·10⁵ dofs (level 5 builds in about 2 minutes)
     rows2d  one cylinder mesh (3.3·10⁵ dofs, 10 272 rows, the finest 6.25 nm at the lowest
             point), δ from 6·10⁻⁵ µm to 40 µm: 88 to 10 236 rows in contact (at 40 µm the
             contact passes the zone: every row of it holds)
     rows3d  one sphere mesh, δ from 1 µm to 20 µm: 10² rows in contact to most of its rows
 
-Runs on each: contactqp.solve by lagrange, semismooth_newton, pgs (its sweeps in its cell;
+Runs on each: contactqp.solve by lagrange, lagrange with engine="amg" (column "lagrange
+(amg)": K by conjugate gradients with pyamg's multigrid, contactqp.model.iterative; refused
+where pyamg is not installed), semismooth_newton, pgs (its sweeps in its cell;
 it forms the dense W, and is refused past that size), penalty, augmented and qp (its default
 backend), end to end (model, method, check); and Clarabel, OSQP and PIQP called directly
 (through qpsolvers, at their default settings) on the same QP written on the free dofs,
@@ -65,8 +67,9 @@ FLOOR_TIMES = 10.0  # ... or this many times the case's floor, where that is lon
 REPEATS, REPEAT_UNDER = 3, 2.0  # a run under REPEAT_UNDER s is timed as the median of REPEATS
 CHECK_ALLOWANCE = 60.0  # s more for a peer's run: the check of its answer, outside its time
 ZONE, APPROACH = 0.5, 0.01  # mm: the contact zone's (half-)width, δ
-METHODS = ("lagrange", "semismooth_newton", "pgs", "penalty", "augmented", "qp")
-SHORT = {"semismooth_newton": "ssn"}  # the table's column names
+METHODS = ("lagrange", "lagrange_amg", "semismooth_newton", "pgs", "penalty", "augmented", "qp")
+ENGINES = {"lagrange_amg": ("lagrange", "amg")}  # a run's method and engine, where not direct
+SHORT = {"semismooth_newton": "ssn", "lagrange_amg": "lagrange (amg)"}  # the table's columns
 PEERS = ("clarabel", "osqp", "piqp")
 FLOOR_CANDIDATES = {  # benchmarks/candidates.py's names: the floor's
     "superlu_colamd": "SuperLU COLAMD", "superlu_mmd": "SuperLU MMD symmetric",
@@ -115,7 +118,7 @@ CASES = (
     *(Case("dofs2d", Mesh(2, ZONE / n, growth), APPROACH, "full")
       for n, growth in ((160, 0.05), (640, 0.03), (2000, 0.02))),
     Case("dofs3d", SMALL3D, APPROACH, "both"),
-    *(Case("dofs3d", level(k), APPROACH, "full") for k in (2, 3, 4)),
+    *(Case("dofs3d", level(k), APPROACH, "full") for k in (2, 3, 4, 5)),
     *(Case("rows2d", ROWS2D, approach, "full") for approach in ROWS2D_APPROACHES),
     *(Case("rows3d", ROWS3D, approach, "full") for approach in (1.7e-3, 5e-3, 0.02)),
     # --quick: the rows sweeps' logic on the small meshes, at two loads each
@@ -218,8 +221,9 @@ def peer(problem: contactqp.Problem, solver: str) -> dict[str, Any]:
 def method(problem: contactqp.Problem, name: str) -> dict[str, Any]:
     """contactqp.solve by one method, end to end (its check included)."""
     start = time.perf_counter()
+    name, engine = ENGINES.get(name, (name, "direct"))
     try:
-        result = contactqp.solve(problem, name)
+        result = contactqp.solve(problem, name, engine=engine)
     except contactqp.ContactqpError as error:
         return {"refused": str(error)[:200]}
     return {"seconds": time.perf_counter() - start,
@@ -371,7 +375,7 @@ def table(cases: list[dict[str, Any]]) -> str:
             "check apart.\n")
 
 
-COLOURS = {"lagrange": "tab:blue", "semismooth_newton": "tab:cyan", "pgs": "tab:olive",
+COLOURS = {"lagrange": "tab:blue", "lagrange_amg": "tab:pink", "semismooth_newton": "tab:cyan", "pgs": "tab:olive",
            "penalty": "tab:orange", "augmented": "tab:green",
            "qp": "tab:purple", "clarabel": "tab:red", "osqp": "tab:brown", "piqp": "tab:gray"}
 
