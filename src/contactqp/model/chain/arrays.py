@@ -90,14 +90,6 @@ class SolvingArrays:
         return wall_arrays(self)
 
     @cached_property
-    def row_compliance_roots(self) -> np.ndarray:
-        """√ of :attr:`row_compliance` where it is finite and positive, NaN elsewhere (the
-        natural map's scaling, :func:`contactqp.check.natural_map`)."""
-        compliance = self.row_compliance
-        usable = np.isfinite(compliance) & (compliance > 0.0)
-        return _read_only(np.where(usable, np.sqrt(np.where(usable, compliance, 1.0)), np.nan))
-
-    @cached_property
     def outside_nodes(self) -> np.ndarray:
         """The node of every force from outside but the distributed loads' (the point loads,
         each contact row's nonzeros, the supports), in the order the check lists them

@@ -46,7 +46,7 @@ TOPOLOGY = ("node_offsets", "node_bar", "bar_ends", "elements", "element_positio
             "element_stiffness", "areas", "yield_stress", "compliance", "chained_compliance",
             "link_compliance", "link_stiffness", "node_x", "support_nodes", "load_nodes",
             "longest_bar", "row_compliance", "row_bars", "floating_bars", "wall_nodes_by_side",
-            "held_cache", "row_compliance_roots", "softest", "outside_nodes", "support_sides")
+            "held_cache", "softest", "outside_nodes", "support_sides")
 
 
 # ... and those that depend on the gaps but not on the load values: shared when only the
