@@ -160,12 +160,17 @@ class AmgK:
                 f"no Cholesky factor (engine='direct' names an indefinite K's pivot, and "
                 f"solves a singular K whose free modes contact rows hold)") from None
         met = _curvature(K, hierarchy)
-        if met:
+        if met == "negative":
             raise ProblemError(
                 f"K must be positive definite for engine='amg': conjugate gradients on K x = b "
-                f"(b random, {K.shape[0]} free dofs) {met} (engine='direct' names an "
-                f"indefinite K's pivot, and solves a singular K whose free modes contact rows "
-                f"hold)")
+                f"(b random, {K.shape[0]} free dofs) met a direction of negative curvature "
+                f"(engine='direct' names an indefinite K's pivot, and solves a singular K whose "
+                f"free modes contact rows hold)")
+        if met:
+            raise SolverError(
+                f"conjugate gradients (engine='amg') on K x = b (b random, {K.shape[0]} free "
+                f"dofs) did not converge in {MAX_ITERATIONS} iterations: K singular, or too "
+                f"ill-conditioned for its multigrid (engine='direct' says which)")
         return cls(K, hierarchy, setup_seconds=time.perf_counter() - start)
 
     @property
@@ -223,7 +228,8 @@ class AmgK:
 
 
 def _curvature(K: sp.csr_matrix, hierarchy: Any) -> str:
-    """What shows K not positive definite, or "": pyamg's conjugate gradients, preconditioned
+    """"negative" where K shows a direction of negative curvature, "unsolved" where the solve
+    does not converge, else "": pyamg's conjugate gradients, preconditioned
     by the hierarchy's V-cycle, on K x = b for b random (the seed fixed), to RTOL, stop where a
     curvature pᵀKp or rᵀMr is negative (pyamg reports -1). Why this is evidence: with M positive
     definite (the V-cycle of a positive definite K with symmetric smoothing is), the iteration is
@@ -239,10 +245,8 @@ def _curvature(K: sp.csr_matrix, hierarchy: Any) -> str:
         x, info = cg(K, b, tol=RTOL, maxiter=MAX_ITERATIONS,
                      M=hierarchy.aspreconditioner(cycle="V"))
     if info < 0:
-        return "met a direction of negative curvature"
-    if info > 0 or not np.isfinite(x).all():
-        return f"did not converge in {MAX_ITERATIONS} iterations"
-    return ""
+        return "negative"
+    return "unsolved" if info > 0 or not np.isfinite(x).all() else ""
 
 
 def _Operator(n: int, matvec: Any) -> Any:
