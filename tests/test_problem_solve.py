@@ -188,11 +188,23 @@ def assert_within_bounds(result, u, lam, redundant=None):
     return True
 
 
+def solved_or_refused(problem, method: str, options: dict, u, lam) -> bool:
+    """assert_within_bounds of the method's answer, or False where it refuses in one line
+    (a SolverError: augmented's active set cycles on random_problem(1010000), four rows held
+    that nearly repeat each other's constraint; lagrange solves it)."""
+    try:
+        result = contactqp.solve(problem, method, **options)
+    except SolverError as refusal:
+        assert "\n" not in str(refusal)
+        return False
+    return assert_within_bounds(result, u, lam)
+
+
 @pytest.mark.parametrize("seed", range(12))
 def test_no_verified_answer_past_its_bound(seed):
     problem = random_problem(seed)
     u, lam = exact_answer(problem)
-    verified = [assert_within_bounds(contactqp.solve(problem, method, **options), u, lam)
+    verified = [solved_or_refused(problem, method, options, u, lam)
                 for method, options in SETTINGS]
     assert verified[0]  # Lagrange is exact: its answer is verified
 
