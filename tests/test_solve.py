@@ -386,10 +386,16 @@ def test_every_method_gives_the_same_physical_answer_in_both_unit_systems(seed):
                 assert np.abs(result.u - per_metre * exact.displacement).max() <= (
                     contactqp.GUARANTEE[1] * U), (method, options, per_metre)
         if not (si.verified and in_mm.verified):
+            # a residual near its tolerance may fall either side of it: equilibrium too
+            # (seed 125: a press fit whose walls carry 5.3e10 N against F = 9.6e5 N, lagrange's
+            # equilibrium residual 1.0e-6 in SI and 6.3e-6 in mm, the force bound 5e-11)
             near = [max(r.residuals["force"], r.residuals["displacement"]) for r in (si, in_mm)]
+            balance = [r.residuals["equilibrium"] or 0.0 for r in (si, in_mm)]
             resolution = max(penalty_resolution(r) for r in (si, in_mm))
             assert method == "qp" or si.verified == in_mm.verified or any(
-                1e-6 <= x <= 1e-4 for x in near) or (
+                1e-6 <= x <= 1e-4 for x in near) or any(
+                0.1 * TOLERANCES.equilibrium <= x <= 10 * TOLERANCES.equilibrium
+                for x in balance) or (
                 resolution >= 0.1 * TOLERANCES.equilibrium) or not (
                 np.isfinite(si.u).all() and np.isfinite(in_mm.u).all()), (method, options)
             continue
