@@ -84,7 +84,8 @@ def contact_lcp(problem: Model | Condensed | ContactModel, max_rows: int | None 
         raise SolverError(f"the complementarity methods form the dense flexibility W = C K⁻¹ Cᵀ "
                           f"(rows x rows) and K⁻¹Cᵀ: up to {max_rows} contact rows and "
                           f"{LCP_ENTRIES} entries; this {what} has {rows} contact rows and "
-                          f"{problem.n_free} {unknowns} (use lagrange)")
+                          f"{problem.n_free} {unknowns} (use lagrange; pgs takes more rows with "
+                          f"its option max_rows)")
     u_free = problem.free_displacement
     if problem.flexibility_in_blocks:
         columns, W = None, problem.flexibility(np.arange(rows))
