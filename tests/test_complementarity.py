@@ -349,3 +349,10 @@ def test_pgs_past_its_rows_by_its_option(monkeypatch, capfd):
         with pytest.raises(contactqp.OptionError, match="max_rows must be a whole number"):
             contactqp.solve(problem, "pgs", max_rows=bad)
     assert capfd.readouterr() == ("", "")
+    from contactqp.cli import main
+
+    assert main(["solve", "--method", "pgs", "--max-rows", "2", "--json"]) == 0  # 1 row
+    capfd.readouterr()
+    assert main(["solve", "--method", "pgs", "--max-rows", "0"]) == 2
+    error = capfd.readouterr().err.strip()
+    assert error.count("\n") == 0 and "max_rows must be a whole number >= 1, got 0" in error
