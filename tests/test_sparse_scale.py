@@ -399,3 +399,24 @@ def test_a_factor_past_the_memory_available_is_one_line(monkeypatch, capfd):
     assert capfd.readouterr() == ("", "")
     monkeypatch.setattr(factor_module, "available_memory", lambda: None)
     assert contactqp.solve(problem.with_values(f=problem.f), "lagrange").verified
+
+
+def test_memory_where_the_system_does_not_say_what_is_available(monkeypatch):
+    """Without Linux's MemAvailable the guard above reads all of the machine's memory, never
+    the free pages alone (on macOS most memory is cache, and the free pages would refuse
+    factors that fit)."""
+    import builtins
+    import os
+
+    real_open = builtins.open
+
+    def no_meminfo(path, *args, **kwargs):
+        if str(path) == "/proc/meminfo":
+            raise FileNotFoundError(path)
+        return real_open(path, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "open", no_meminfo)
+    found = factor_module.available_memory()
+    page = os.sysconf("SC_PAGE_SIZE")
+    assert found == os.sysconf("SC_PHYS_PAGES") * page
+    assert found >= os.sysconf("SC_AVPHYS_PAGES") * page

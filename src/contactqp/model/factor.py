@@ -71,8 +71,9 @@ def factorise(K: sp.spmatrix, ordering: str = ORDERING) -> spla.SuperLU:
 
 
 def available_memory() -> int | None:
-    """The memory this machine has available in bytes (Linux's MemAvailable, else the free
-    pages), or None where neither is known."""
+    """The memory this machine has available in bytes: Linux's MemAvailable, else all of its
+    memory (the free pages elsewhere leave out what caches hold and would refuse factors that
+    fit), or None where neither is known."""
     import os
 
     try:
@@ -83,7 +84,7 @@ def available_memory() -> int | None:
     except (OSError, ValueError, IndexError):
         pass
     try:
-        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
     except (AttributeError, OSError, ValueError):
         return None
 
