@@ -9,6 +9,7 @@ indefinite ones). Anything wider goes to SuperLU.
 from __future__ import annotations
 
 from types import ModuleType
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -65,6 +66,15 @@ def _solve_one_by_one(pivot: float, rhs: np.ndarray) -> np.ndarray:
     if pivot == 0.0:
         raise np.linalg.LinAlgError("1 x 1 matrix is 0")
     return np.asarray(rhs, dtype=float) / pivot
+
+
+def magnitude(matrix: Any) -> Any:
+    """|matrix| for a product, sharing the matrix's index arrays where it is compressed (abs()
+    copies them: 0.1 s of the check on a 3.3·10⁵-dof model's K)."""
+    if getattr(matrix, "format", None) in ("csr", "csc"):
+        return type(matrix)((np.abs(matrix.data), matrix.indices, matrix.indptr),
+                            shape=matrix.shape)
+    return abs(matrix)
 
 
 def symmetric_eigenvalues(matrix: np.ndarray) -> np.ndarray:

@@ -348,8 +348,10 @@ def solve_augmented(model, contact: str, *, max_iterations: int | None = None) -
     over to the Schur complement's loop (:func:`contactqp.methods.schur.solve_schur`).
     Measured on the Hertz cylinder (contactqp.fem, 1.9·10⁴ to 1.7·10⁵ dofs): 2, 4 and 6 steps
     (the last the settled set again, to round-off) at 27, 214 and 754 rows in contact, where
-    the same loop from the rows u₀ passes took 9 and 11 (27, 214); a set that differs from the one before
-    by a few rows is solved from that one's factor (:class:`contactqp.model.augmented.Update`).
+    the same loop from the rows u₀ passes took 9 and 11 (27, 214); a set that differs from the
+    one before by a few rows is solved from that one's factor (Woodbury,
+    :class:`contactqp.model.augmented.Update`), by more through rank updates of a factor
+    (:mod:`contactqp.model.updown`) where they cost less than a factorisation.
     Where the steps only release rows and the releases halve (:func:`halving`), twice as many
     are released (:func:`released_ahead`): on the 3.3·10⁵-dof cylinder of the scaling
     benchmark, 88 to 4 239 rows in contact, 5–8 set factorisations became 4 (a row released
@@ -393,7 +395,8 @@ def solve_augmented(model, contact: str, *, max_iterations: int | None = None) -
                 # no refinement step after: Uzawa's steps are one, on the system's residuals
                 return Solution(u, lam, solver="lagrange", iterations=iteration,
                                 info={"active_set": "primal-dual", "set_factorisations":
-                                      model.cache.set_factorisations})
+                                      model.cache.set_factorisations,
+                                      "set_updates": model.cache.set_updates})
             steps = STEPS  # the same set again, to round-off, and decided again
             continue
         start = None

@@ -22,13 +22,21 @@ cylinder; the steps stop where they no longer shrink by SLOWER below NOISE, roun
 residuals are the system's own, so the fixed point is the exact answer, not the penalised one
 (no dense W_AA is formed; each step is one solve with M_A's factor). A correction for the
 refinement of an answer (:func:`contactqp.model.schur.correction`) is one step: its error is
-what the refinement measures next (:mod:`contactqp.check.on_set`). Rows that repeat each other's constraint (C_A of lower rank: the
-answer fixes only Cᵀλ) keep the Schur complement's least-norm solve
-(:mod:`contactqp.model.schur`).
+what the refinement measures next (:mod:`contactqp.check.on_set`). Rows that repeat each
+other's constraint (C_A of lower rank: the answer fixes only Cᵀλ) keep the Schur complement's
+least-norm solve (:mod:`contactqp.model.schur`).
+
+A set that differs from a factored one by a few rows costs less than a numeric
+factorisation: up to UPDATE_ROWS rows by Woodbury from the held factor (:class:`Update`, a
+solve per row), more by rank updates of the factor taken over (:func:`_by_updates`,
+:mod:`contactqp.model.updown`: CHOLMOD's update of a row costs 1/630 to 1/100 of a numeric
+factorisation on the Hertz models), where they cost less than a factorisation by the times
+measured so far. An updated factor is checked before a set's exact solve (:func:`_resolves`).
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -36,6 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from contactqp.errors import SolverError
+from contactqp.linalg import magnitude
 from contactqp.model.factor import Cholmod, CholmodK
 
 SparseModel = Any  # the model these functions read (contactqp.model.sparse.SparseModel)
@@ -124,20 +133,27 @@ class AugmentedSet:
         return self.held_rows[1], self.held_rows[2]
 
     def operator(self, model: SparseModel):
-        """(M_A⁻¹ as a function, the key of the factor it reads): the held factor of M_A, or
-        of the set before with ``update``, or M_A factored now."""
+        """(M_A⁻¹ as a function, whether the factor it reads still holds M_A, whether that
+        is a factor moved by rank updates): the held factor of M_A, the factor of the set
+        before with ``update`` (Woodbury), a factor moved to M_A by rank updates
+        (:func:`_by_updates`), or M_A factored now."""
         engine = model.factor.engine
         if engine.holds == self.key:
-            return engine.solve, self.key
+            return engine.solve, lambda: engine.holds == self.key, False
         if self.update is not None and engine.holds == self.update.key:
             update = self.update
-            return (lambda rhs: update.solve(engine, rhs)), update.key
+            return ((lambda rhs: update.solve(engine, rhs)),
+                    lambda: engine.holds == update.key, False)
+        modified = _by_updates(model, self)
+        if modified is not None:
+            return modified.solve, lambda: modified.holds == self.key, True
         try:
             engine.factor(self.key, self.values)
         except ArithmeticError:
             raise SolverError("K + C_AᵀRC_A is not positive definite") from None
         model.cache.set_factorisations += 1
-        return engine.solve, self.key
+        return engine.solve, lambda: engine.holds == self.key, False
+
     def answer_on_set(self, model: SparseModel, start: tuple[np.ndarray, np.ndarray] | None
                       = None) -> tuple[np.ndarray, np.ndarray]:
         """(u, λ_A) with the rows held on their gaps under the model's loads, to round-off,
@@ -157,8 +173,10 @@ class AugmentedSet:
         round-off, or until a step is below ``within`` (of F and U), or ``steps`` steps;
         from ``start`` (u, λ_A) where given, else from 0."""
         F, U = model.force_scale, model.displacement_scale  # K's solves first
-        engine = model.factor.engine
-        inverse, held = self.operator(model)
+        inverse, holding, updated = self.operator(model)
+        if updated and steps > 1 and not _resolves(model, self, inverse):
+            model.cache.modified, model.cache.updates_refused = None, True
+            return self.solve(model, force, gap, within, steps, start)
         C_A, C_A_T = self.rows_of(model.C)
         u, lam = ((np.zeros(model.n_free), np.zeros(self.rows.size)) if start is None
                   else (start[0].copy(), start[1].copy()))
@@ -166,7 +184,7 @@ class AugmentedSet:
         for step in range(steps):
             r = force - model.K @ u - C_A_T @ lam
             s = gap - C_A @ u
-            if engine.holds != held:  # nothing between the steps solves with K
+            if not holding():  # nothing between the steps solves with K
                 raise SolverError("the augmented factor was replaced during its solve")
             du = inverse(r + C_A_T @ (self.rho * s))
             u = u + du
@@ -178,6 +196,10 @@ class AugmentedSet:
             if size <= within or (step >= 1 and size > SLOWER * last and size <= NOISE):
                 break
             last = size
+        if updated and steps > 1 and size > NOISE:  # the updated factor is too far off to
+            # resolve the set (a downdate's cancellation): factored from here on
+            model.cache.modified, model.cache.updates_refused = None, True
+            return self.solve(model, force, gap, within, steps, start)
         if steps > 1:  # an exact solve: the force left where the rows hold goes to their λ
             lam = lam + self.held_share(C_A, force - model.K @ u - C_A_T @ lam)
         return u, lam
@@ -272,6 +294,135 @@ def _update(model: SparseModel, rows: np.ndarray) -> Update | None:
     rho = STIFFER * model.row_stiffness[changed]
     return Update(held.key, sp.csr_array(model.C[changed]),
                   np.concatenate((rho[:added.size], -rho[added.size:])))
+
+
+COPY_SHARE = 0.5  # taking a factor over for rank updates (its change to a simplicial LDLᵀ),
+# in numeric factorisations, before one is measured (measured 0.2-0.3 on 2D Hertz models)
+ROW_SHARE = 1 / 300  # an update's cost a row, in numeric factorisations, before one is
+# measured (measured 1/630 to 1/100: 2D and 3D Hertz models, 1.6·10⁴ to 8.8·10⁵ dofs)
+SLOWER_SOLVES = 1.5  # a solve with the simplicial factor, in supernodal ones, before one is
+# measured (measured 1.4 in 2D, 2 in 3D)
+SOLVES_AFTER = 8  # solves a set's factor still serves: the steps left and the check's
+AMORTISED = 2.0  # numeric factorisations that taking a factor over saves: this set's and at
+# least one after (a 2D contact's edge is crossed in several sets: 6 on the scaling
+# benchmark's cylinder)
+
+
+def _by_updates(model: SparseModel, target: AugmentedSet):
+    """The factor of ``target``'s M_A by rank updates (:mod:`contactqp.model.updown`) where
+    they cost less than a numeric factorisation: of the updated factor kept with the model,
+    or of the engine's factor of a set, taken over; each row that enters an update and each
+    that leaves a downdate. None otherwise (or where the library is not there)."""
+    from contactqp.model import updown
+
+    if updown.library() is None or model.cache.updates_refused:
+        return None
+    cache, engine = model.cache, model.factor.engine
+    numeric = engine.numeric_seconds or model.factor.factor_seconds or 1.0
+    copy = cache.modified
+    if copy is not None and copy.holds == target.key:
+        return copy
+    # the solves left run on the simplicial factor: its extra time counts against it
+    column = model.factor.column_seconds or 0.0
+    slower = SOLVES_AFTER * max(0.0, (copy.column_seconds if copy is not None and
+                                      copy.column_seconds else SLOWER_SOLVES * column) - column)
+    row = copy.row_seconds if copy is not None and copy.row_seconds else ROW_SHARE * numeric
+    options = []  # (the rows' updates, what the route costs in all, its base)
+    if copy is not None and copy.holds is not None:
+        rows = _changed(copy.rows, target.rows) * row
+        options.append((rows, slower + rows, None))
+    held = cache.sets.get(engine.holds)  # a set's factor (K's is kept for K's solves, and a
+    # first set of many rows by updates of it cost twice a numeric factorisation on the 3D
+    # sphere, 207 rows at 32 550 dofs)
+    base = None if held is None else (held.rows, held.rho)
+    if base is not None:
+        made = cache.copy_seconds if cache.copy_seconds is not None else COPY_SHARE * numeric
+        rows = _changed(base[0], target.rows) * row
+        options.append((rows, made + slower + rows, base))
+    # the updates must beat this set's numeric factorisation; taking the factor over and the
+    # slower solves, AMORTISED of them
+    options = [option for option in options if option[0] < numeric
+               and option[1] < AMORTISED * numeric]
+    if not options:
+        return None
+    _, _, base = min(options, key=lambda option: option[1])
+    if base is not None:
+        copy = _copy(model, base)
+        if copy is None:
+            return None
+    return copy if _move(model, copy, target) else None
+
+
+def _resolves(model: SparseModel, target: AugmentedSet, inverse) -> bool:
+    """Whether an updated factor of ``target``'s M_A solves it: M_A x = b for a random b, to
+    PROBE of the terms of M_A x (a downdate's cancellation leaves digits, not all; a factor
+    off by more would let the refinement stop on small steps that are not small residuals).
+    One solve, before the exact solve of a set."""
+    b = np.random.default_rng(0).standard_normal(model.n_free)
+    x = inverse(b)
+    C_A, C_A_T = target.rows_of(model.C)
+    product = model.K @ x + C_A_T @ (target.rho * (C_A @ x))
+    terms = (magnitude(model.K) @ np.abs(x)
+             + magnitude(C_A_T) @ (target.rho * (magnitude(C_A) @ np.abs(x))) + np.abs(b))
+    return bool(np.all(np.abs(product - b) <= PROBE * terms.max(initial=0.0)))
+
+
+PROBE = 1e-8  # of the terms of M_A x: an updated factor that solves M_A worse is not used
+
+
+def _changed(rows: np.ndarray, other: np.ndarray) -> int:
+    """How many rows one set has that the other has not, both ways."""
+    return int(np.setxor1d(rows, other, assume_unique=True).size)
+
+
+def _copy(model: SparseModel, base: tuple[np.ndarray, np.ndarray]):
+    """The engine's numeric factor (of K + Cᵀ diag(ρ) C on the ``base`` rows and weights)
+    taken over for rank updates (:meth:`contactqp.model.updown.Modified.taken_from`; the
+    engine keeps its analysis and factors again when asked), kept as the model's modified
+    factor; None where the machine has not the memory for the change (twice the factor's
+    entries) or the library refuses."""
+    from contactqp.model import updown
+    from contactqp.model.factor import available_memory
+
+    cache, engine = model.cache, model.factor.engine
+    entries, available = engine.entries(), available_memory()
+    if engine.spare is None or (entries is not None and available is not None
+                                and 16 * entries[1] > available):
+        return None
+    cache.modified = None  # its memory back first
+    start = time.perf_counter()
+    held, engine.holds = engine.holds, None  # whatever happens, its numeric factor goes
+    copy = updown.Modified.taken_from(engine.symbolic, engine.n, engine.spare)
+    cache.copy_seconds = time.perf_counter() - start
+    if copy is None:
+        return None
+    copy.holds, copy.rows, copy.rho = held, base[0].copy(), base[1].copy()
+    cache.modified = copy
+    return copy
+
+
+def _move(model: SparseModel, copy, target: AugmentedSet) -> bool:
+    """Update ``copy`` from the set it holds to ``target``: the rows that enter first (the
+    matrix stays positive definite on the way), then those that leave; False (and the copy
+    dropped) where CHOLMOD refuses."""
+    entering = np.setdiff1d(target.rows, copy.rows, assume_unique=True)
+    leaving = np.setdiff1d(copy.rows, target.rows, assume_unique=True)
+    copy.holds = None
+    done = (copy.update(model.C[entering], _weights(target.rows, target.rho, entering),
+                        add=True) and
+            copy.update(model.C[leaving], _weights(copy.rows, copy.rho, leaving), add=False))
+    if not done:
+        model.cache.modified = None
+        return False
+    copy.holds, copy.rows, copy.rho = target.key, target.rows.copy(), target.rho.copy()
+    model.cache.set_updates += 1
+    return True
+
+
+def _weights(rows: np.ndarray, rho: np.ndarray, which: np.ndarray) -> np.ndarray:
+    """ρ of the rows ``which`` (some of ``rows``, whose weights are ``rho``)."""
+    order = np.argsort(rows, kind="stable")
+    return rho[order[np.searchsorted(rows, which, sorter=order)]]
 
 
 __all__ = ["EXACT", "STIFFER", "AugmentedSet", "Penalised", "RowProducts", "augmented_set",

@@ -42,6 +42,7 @@ computed (:class:`ColumnCache`), from SuperLU's Uᵀ.
 from __future__ import annotations
 
 import time
+import weakref
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -134,6 +135,9 @@ class Cholmod:
     symbolic: Any
     matrix: Any  # cvxopt's copy of the pattern, whose values each factorisation sets
     holds: Any = None
+    numeric_seconds: float | None = None  # the last numeric factorisation's time
+    spare: int | None = None  # a copy of the analysis, for rank updates to take the numeric
+    # factor over (contactqp.model.updown), where CHOLMOD's library is found
 
     @classmethod
     def of_pattern(cls, pattern: sp.csc_matrix) -> Cholmod:
@@ -148,8 +152,14 @@ class Cholmod:
         ``columns``), in CSC order (:func:`lower_triangle`)."""
         from cvxopt import cholmod, spmatrix
 
+        from contactqp.model import updown
+
         matrix = spmatrix(np.ones(rows.size), rows, columns, (n, n))
-        return cls(n, rows, columns, cholmod.symbolic(matrix), matrix)
+        made = cls(n, rows, columns, cholmod.symbolic(matrix), matrix)
+        made.spare = updown.spare_analysis(made.symbolic)
+        if made.spare is not None:
+            weakref.finalize(made, updown.release, made.spare)
+        return made
 
     def entries(self) -> tuple[int, int] | None:
         """(the entries of L, those its numeric factor stores) as the analysis plans them: the
@@ -162,16 +172,9 @@ class Cholmod:
         long, the count between the pattern's entries and n(n+1)/2, the size up to n²."""
         import ctypes
 
-        capsule = ctypes.py_object(self.symbolic)
-        name_of = ctypes.pythonapi.PyCapsule_GetName
-        name_of.restype, name_of.argtypes = ctypes.c_char_p, [ctypes.py_object]
-        pointer_of = ctypes.pythonapi.PyCapsule_GetPointer
-        pointer_of.restype = ctypes.c_void_p
-        pointer_of.argtypes = [ctypes.py_object, ctypes.c_char_p]
-        name = name_of(capsule.value)
-        if not (name or b"").startswith(b"CHOLMOD FACTOR"):
-            return None
-        address = pointer_of(capsule.value, name)
+        from contactqp.model.updown import factor_address
+
+        address = factor_address(self.symbolic)
         word = ctypes.sizeof(ctypes.c_size_t)
         if not address or word != 8 or ctypes.sizeof(ctypes.c_void_p) != 8:
             return None
@@ -203,8 +206,10 @@ class Cholmod:
         from cvxopt import cholmod, matrix
 
         self.holds = None
+        start = time.perf_counter()
         self.matrix.V = matrix(values)  # in place: a new spmatrix sorts its entries (10x)
         cholmod.numeric(self.matrix, self.symbolic)
+        self.numeric_seconds = time.perf_counter() - start
         self.holds = key
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
@@ -356,6 +361,11 @@ class ColumnCache:
     sets: dict[bytes, Any] = field(default_factory=dict)  # augmented set solves, by rows
     products: Any = None  # every row's CᵀC on the augmented pattern (model.augmented)
     set_factorisations: int = 0  # numeric factorisations of augmented matrices
+    modified: Any = None  # a set's factor that rank updates move to other sets
+    # (contactqp.model.updown.Modified), once made
+    set_updates: int = 0  # sets reached by rank updates of ``modified``
+    copy_seconds: float | None = None  # the last copy of a factor for ``modified``, timed
+    updates_refused: bool = False  # an updated factor that did not resolve its set: none since
     compliance: np.ndarray | None = None  # W_ii per row where solved so far (NaN elsewhere;
     # CHOLMOD's factor: each is a solve, asked by the LCP's W and the check's own s)
 

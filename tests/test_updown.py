@@ -1,0 +1,169 @@
+"""Sets reached by rank updates of a factor (contactqp.model.updown, used by
+contactqp.model.augmented): a set of rows held that differs from a factored one by k rows is
+k rank-one updates of that factor (CHOLMOD's cholmod_updown, called in the library cvxopt
+ships), not a new numeric factorisation.
+
+Every expected number comes from elsewhere: the dense matrix solved by LAPACK, exact
+rational arithmetic (tests/test_problem_solve.py's exact_answer), and the same solve with
+the updates switched off (each set factorised, as before they existed).
+
+Glossary: K stiffness, C rows, ρ a row's weight, M = K + Cᵀ diag(ρ) C on the rows held.
+"""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import contactqp
+from contactqp.model import augmented, updown
+from contactqp.model.factor import Cholmod
+from test_problem_solve import Infeasible, exact_answer, random_problem
+from test_sparse_scale import random_rows, spring_chain
+
+pytest.importorskip("cvxopt")
+if updown.library() is None:  # pragma: no cover - a cvxopt without its CHOLMOD library file
+    pytest.skip("CHOLMOD's library is not found beside cvxopt", allow_module_level=True)
+
+
+def factored(K: sp.csr_array, C: np.ndarray, rows: np.ndarray, rho: np.ndarray) -> Cholmod:
+    """CHOLMOD's factor of K + C_rowsᵀ diag(ρ_rows) C_rows on the pattern of K + CᵀC."""
+    n = K.shape[0]
+    pattern = sp.csc_matrix(abs(K) + abs(sp.csr_array(C)).T @ abs(sp.csr_array(C)))
+    engine = Cholmod.of_pattern(pattern)
+    M = sp.csr_array(K + C[rows].T @ np.diag(rho[rows]) @ C[rows])
+    engine.factor("M", np.asarray(M.toarray()[engine.rows, engine.columns]).reshape(-1))
+    assert engine.n == n and engine.spare is not None
+    return engine
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_updates_and_downdates_equal_the_dense_inverse(seed):
+    """A factor of one set taken over and moved to another (rows entering and leaving,
+    weights spread over 10⁴) solves like LAPACK's inverse of the other set's matrix; the
+    engine factors again on its own analysis afterwards."""
+    rng = np.random.default_rng(seed)
+    n, m = 40, 16
+    K = spring_chain(n, rng)
+    C = random_rows(m, n, 3, (-1.0, 1.0, 2.0), rng)
+    rho = rng.uniform(1.0, 1e4, m)
+    first, second = np.sort(rng.choice(m, 9, replace=False)), np.sort(rng.choice(m, 7,
+                                                                                 replace=False))
+    engine = factored(K, C, first, rho)
+    moved = updown.Modified.taken_from(engine.symbolic, n, engine.spare)
+    entering, leaving = np.setdiff1d(second, first), np.setdiff1d(first, second)
+    Cs = sp.csr_array(C)
+    assert moved.update(Cs[entering], rho[entering], add=True)
+    assert moved.update(Cs[leaving], rho[leaving], add=False)
+    b = rng.standard_normal((n, 3))
+    M = K.toarray() + C[second].T @ np.diag(rho[second]) @ C[second]
+    expected = np.linalg.solve(M, b)
+    assert np.abs(moved.solve(b) - expected).max() <= 1e-9 * np.abs(expected).max()
+    assert np.abs(moved.solve(b[:, 0]) - expected[:, 0]).max() <= 1e-9 * np.abs(expected).max()
+    engine.factor("K", np.asarray(K.toarray()[engine.rows, engine.columns]).reshape(-1))
+    again = np.linalg.solve(K.toarray(), b)
+    assert np.abs(engine.solve(b) - again).max() <= 1e-10 * np.abs(again).max()
+
+
+def always_update(monkeypatch) -> None:
+    """Rank updates whatever they cost (a set differing by every row included)."""
+    monkeypatch.setattr(augmented, "ROW_SHARE", 0.0)
+    monkeypatch.setattr(augmented, "COPY_SHARE", 0.0)
+    monkeypatch.setattr(augmented, "SOLVES_AFTER", 0)
+    monkeypatch.setattr(augmented, "UPDATE_ROWS", 0)  # no Woodbury either
+    monkeypatch.setattr(augmented, "_by_updates", _timeless(augmented._by_updates))
+
+
+def _timeless(by_updates):
+    def chosen(model, target):
+        model.cache.copy_seconds = 0.0
+        if model.cache.modified is not None:
+            model.cache.modified.row_seconds = 0.0
+            model.cache.modified.column_seconds = None
+        return by_updates(model, target)
+    return chosen
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_random_problems_exact_through_updates(seed, monkeypatch):
+    """The random spring networks of tests/test_problem_solve.py with every set after the
+    first reached by updates: a verified answer is within its bounds of the exact rational
+    one."""
+    always_update(monkeypatch)
+    try:
+        problem = random_problem(seed)
+        u, lam = exact_answer(problem)
+    except (contactqp.ContactqpError, Infeasible):
+        pytest.skip("no u meets every row")
+    try:
+        result = contactqp.solve(problem, "lagrange")
+    except contactqp.ContactqpError:
+        return  # refused: nothing claimed
+    if not result.verified:
+        return
+    assert np.abs(result.contact_force - lam).max() <= result.force_error_bound + 1e-12
+    assert np.abs(result.u - u).max() <= result.displacement_error_bound + 1e-12
+
+
+def hertz() -> contactqp.Problem:
+    """The Hertz cylinder at 6.4·10⁴ dofs pushed by 1 nm, whose sets change over a few rows at
+    the contact's edge (18, 10, 5 rows released)."""
+    from contactqp.fem import cylinder_on_flat
+
+    return cylinder_on_flat(zone=0.5, fine=0.5 / 20000, growth=0.4, approach=1e-6).problem
+
+
+def afresh(built: contactqp.Problem) -> contactqp.Problem:
+    return contactqp.Problem(built.K, built.f, built.C, built.g, prescribed=built.prescribed,
+                             prescribed_values=built.prescribed_values)
+
+
+def test_hertz_through_updates_equals_each_set_factorised(monkeypatch, capfd):
+    """The cylinder with every set reached by updates, and with the updates switched off
+    (each set factorised): the same rows in contact and forces within the two bounds; the
+    updates spend fewer numeric factorisations of a set, and print nothing."""
+    built = hertz()
+    with monkeypatch.context() as patch:
+        always_update(patch)
+        by_updates = contactqp.solve(afresh(built), "lagrange")
+    with monkeypatch.context() as patch:
+        patch.setattr(updown, "library", lambda: None)
+        factorised = contactqp.solve(afresh(built), "lagrange")
+    assert by_updates.verified and factorised.verified
+    assert np.array_equal(by_updates.contact_force > 0, factorised.contact_force > 0)
+    assert np.abs(by_updates.contact_force - factorised.contact_force).max() <= (
+        by_updates.force_error_bound + factorised.force_error_bound)
+    assert by_updates.info["set_updates"] >= 1
+    assert by_updates.info["set_factorisations"] < factorised.info["set_factorisations"]
+    assert factorised.info["set_updates"] == 0
+    assert capfd.readouterr() == ("", "")
+
+
+def test_an_updated_factor_that_does_not_resolve_its_set_is_factorised_again(monkeypatch):
+    """An updated factor whose solves are off by a tenth (as a downdate's cancellation could
+    leave it) does not resolve the set: the set is factorised, no update is tried again, and
+    the answer is the one of the updates switched off, within the two bounds."""
+    built = hertz()
+    always_update(monkeypatch)
+    solve = updown.Modified.solve
+    monkeypatch.setattr(updown.Modified, "solve", lambda self, rhs: 0.9 * solve(self, rhs))
+    problem = afresh(built)
+    spoiled = contactqp.solve(problem, "lagrange")
+    monkeypatch.setattr(updown, "library", lambda: None)
+    factorised = contactqp.solve(afresh(built), "lagrange")
+    assert spoiled.verified and factorised.verified
+    assert contactqp.model.sparse.problem_model(problem).cache.updates_refused
+    assert np.abs(spoiled.contact_force - factorised.contact_force).max() <= (
+        spoiled.force_error_bound + factorised.force_error_bound)
+
+
+def test_no_library_no_updates(monkeypatch):
+    """Where no CHOLMOD library file is found (another platform's cvxopt), library() is None
+    and the solve factorises each set."""
+    with monkeypatch.context() as patch:
+        patch.setattr(updown, "_loaded_cholmod", list)
+        updown.library.cache_clear()
+        try:
+            assert updown.library() is None
+        finally:
+            updown.library.cache_clear()
+    assert updown.library() is not None
