@@ -10,7 +10,9 @@ analysis (the ordering and the supernodes) for a new matrix with the same patter
 rows held is one numeric factorisation of K + C_Aᵀ R C_A, whose pattern is fixed by giving it
 once the pattern of K + Cᵀ C, every row's (:class:`Cholmod`). One analysis holds one factor at
 a time; the factor says which matrix it holds and factors K again when K⁻¹ is asked after a
-set's matrix (:class:`CholmodK`). The flexibility W = C K⁻¹ Cᵀ (the complementarity
+set's matrix (:class:`CholmodK`). A set's numeric factor can be taken over for rank updates
+(:mod:`contactqp.model.updown`): the analysis then gets a copy of itself back (``spare``,
+kept from the start) and factors again on it. The flexibility W = C K⁻¹ Cᵀ (the complementarity
 methods) is then solved with K's factor, a block of rows at a time. cvxopt's CHOLMOD solves
 those columns one by one; where cholespy (CHOLMOD again, the extra ``contactqp[cholmod]``) is
 installed, a job of columns that pays for it goes to a second factor of K that it makes once
