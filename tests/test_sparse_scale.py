@@ -126,14 +126,42 @@ def test_diagonal_K_past_the_int32_keys():
     assert np.abs(result.contact_force - lam).max() <= 1e-12
 
 
+def always_update(monkeypatch) -> None:
+    """Sets reached by rank updates of a factor (contactqp.model.updown) whatever they cost:
+    every set after the first, however many rows it changes; no Woodbury."""
+    from contactqp.model import augmented
+
+    monkeypatch.setattr(augmented, "ROW_SHARE", 0.0)
+    monkeypatch.setattr(augmented, "COPY_SHARE", 0.0)
+    monkeypatch.setattr(augmented, "SOLVES_AFTER", 0)
+    monkeypatch.setattr(augmented, "UPDATE_ROWS", 0)
+    by_updates = augmented._by_updates
+
+    def timeless(model, target):  # no measured time stands in their way either
+        model.cache.copy_seconds = 0.0
+        if model.cache.modified is not None:
+            model.cache.modified.row_seconds = 0.0
+            model.cache.modified.column_seconds = None
+        return by_updates(model, target)
+
+    monkeypatch.setattr(augmented, "_by_updates", timeless)
+
+
 @pytest.mark.parametrize("seed", range(40))
-@pytest.mark.parametrize("route", ["cholmod", "superlu"])
+@pytest.mark.parametrize("route", ["cholmod", "superlu", "updates"])
 def test_random_problems_exact_by_either_route(seed, route, monkeypatch):
     """The random spring networks of tests/test_problem_solve.py, by the augmented route
-    (CHOLMOD) and by the Schur complement (SuperLU, as without the extra): both give the
-    exact rational answer within their own bounds (a verified answer is within its bound)."""
+    (CHOLMOD), by it with every set after the first reached by rank updates of a factor, and
+    by the Schur complement (SuperLU, as without the extra): each gives the exact rational
+    answer within its own bounds (a verified answer is within its bound)."""
     if route == "superlu":
         monkeypatch.setattr(factor_module, "cholmod_installed", lambda: False)
+    if route == "updates":
+        from contactqp.model import updown
+
+        if updown.library() is None:
+            pytest.skip("CHOLMOD's library is not found beside cvxopt")
+        always_update(monkeypatch)
     try:
         problem = random_problem(seed)
         u, lam = exact_answer(problem)

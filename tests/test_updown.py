@@ -3,9 +3,10 @@ contactqp.model.augmented): a set of rows held that differs from a factored one 
 k rank-one updates of that factor (CHOLMOD's cholmod_updown, called in the library cvxopt
 ships), not a new numeric factorisation.
 
-Every expected number comes from elsewhere: the dense matrix solved by LAPACK, exact
-rational arithmetic (tests/test_problem_solve.py's exact_answer), and the same solve with
-the updates switched off (each set factorised, as before they existed).
+Every expected number comes from elsewhere: the dense matrix solved by LAPACK, and the same
+solve with the updates switched off (each set factorised, as before they existed); the
+random problems against exact rational arithmetic by this route are in
+tests/test_sparse_scale.py (test_random_problems_exact_by_either_route, route "updates").
 
 Glossary: K stiffness, C rows, ρ a row's weight, M = K + Cᵀ diag(ρ) C on the rows held.
 """
@@ -15,10 +16,9 @@ import pytest
 import scipy.sparse as sp
 
 import contactqp
-from contactqp.model import augmented, updown
+from contactqp.model import updown
 from contactqp.model.factor import Cholmod
-from test_problem_solve import Infeasible, exact_answer, random_problem
-from test_sparse_scale import random_rows, spring_chain
+from test_sparse_scale import always_update, random_rows, spring_chain
 
 pytest.importorskip("cvxopt")
 if updown.library() is None:  # pragma: no cover - a cvxopt without its CHOLMOD library file
@@ -62,46 +62,6 @@ def test_updates_and_downdates_equal_the_dense_inverse(seed):
     engine.factor("K", np.asarray(K.toarray()[engine.rows, engine.columns]).reshape(-1))
     again = np.linalg.solve(K.toarray(), b)
     assert np.abs(engine.solve(b) - again).max() <= 1e-10 * np.abs(again).max()
-
-
-def always_update(monkeypatch) -> None:
-    """Rank updates whatever they cost (a set differing by every row included)."""
-    monkeypatch.setattr(augmented, "ROW_SHARE", 0.0)
-    monkeypatch.setattr(augmented, "COPY_SHARE", 0.0)
-    monkeypatch.setattr(augmented, "SOLVES_AFTER", 0)
-    monkeypatch.setattr(augmented, "UPDATE_ROWS", 0)  # no Woodbury either
-    monkeypatch.setattr(augmented, "_by_updates", _timeless(augmented._by_updates))
-
-
-def _timeless(by_updates):
-    def chosen(model, target):
-        model.cache.copy_seconds = 0.0
-        if model.cache.modified is not None:
-            model.cache.modified.row_seconds = 0.0
-            model.cache.modified.column_seconds = None
-        return by_updates(model, target)
-    return chosen
-
-
-@pytest.mark.parametrize("seed", range(30))
-def test_random_problems_exact_through_updates(seed, monkeypatch):
-    """The random spring networks of tests/test_problem_solve.py with every set after the
-    first reached by updates: a verified answer is within its bounds of the exact rational
-    one."""
-    always_update(monkeypatch)
-    try:
-        problem = random_problem(seed)
-        u, lam = exact_answer(problem)
-    except (contactqp.ContactqpError, Infeasible):
-        pytest.skip("no u meets every row")
-    try:
-        result = contactqp.solve(problem, "lagrange")
-    except contactqp.ContactqpError:
-        return  # refused: nothing claimed
-    if not result.verified:
-        return
-    assert np.abs(result.contact_force - lam).max() <= result.force_error_bound + 1e-12
-    assert np.abs(result.u - u).max() <= result.displacement_error_bound + 1e-12
 
 
 def hertz() -> contactqp.Problem:
