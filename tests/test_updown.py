@@ -127,3 +127,18 @@ def test_no_library_no_updates(monkeypatch):
         finally:
             updown.library.cache_clear()
     assert updown.library() is not None
+
+
+def test_a_refused_update_prints_nothing_and_says_so(capfd):
+    """An update CHOLMOD refuses (the rows' matrix of the wrong size) is False, and nothing is
+    printed (the library's Common is set quiet, not the process's file descriptors: those are
+    shared by threads)."""
+    rng = np.random.default_rng(7)
+    K = spring_chain(20, rng)
+    C = random_rows(6, 20, 2, (1.0, -1.0), rng)
+    engine = factored(K, C, np.arange(3), np.ones(6))
+    moved = updown.Modified.taken_from(engine.symbolic, 20, engine.spare)
+    moved.n = 21  # the rows' matrix then has 21 rows for a factor of 20
+    moved.perm_inverse = np.arange(21)
+    assert moved.update(sp.csr_array(np.ones((1, 21))), np.ones(1), add=True) is False
+    assert capfd.readouterr() == ("", "")

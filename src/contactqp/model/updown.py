@@ -36,8 +36,6 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from contactqp.progress import silenced
-
 COMMON_BYTES = 1 << 16  # room for cholmod_common (about 2.6 kB in CHOLMOD 3, more in 5)
 CHOLMOD_REAL = 1
 CHOLMOD_A = 0  # cholmod_solve's system: A x = b
@@ -125,6 +123,8 @@ def library() -> Library | None:
         found = Library(dll, common)
         if not found.function("start", ctypes.c_int, ctypes.c_void_p)(common):
             continue
+        if not _quiet(common):
+            continue
         return found
     return None
 
@@ -142,6 +142,25 @@ def factor_address(symbolic: Any) -> int | None:
     if not (name or b"").startswith(b"CHOLMOD FACTOR"):
         return None
     return pointer_of(capsule.value, name) or None
+
+
+def _quiet(common: Any) -> bool:
+    """Set the Common's print level to 0 (CHOLMOD prints its warnings and errors from C
+    otherwise, and the library prints nothing unless asked), where the Common's first fields
+    read as cholmod_start leaves them (maxrank 8, supernodal CHOLMOD_AUTO, print 3, precise
+    FALSE): their layout, the same in CHOLMOD 3 to 5, is then the one assumed. False
+    otherwise (no updates: nothing is written into a layout not known)."""
+    maxrank = ctypes.c_size_t.from_buffer(common, COMMON_MAXRANK).value
+    supernodal = ctypes.c_int.from_buffer(common, COMMON_SUPERNODAL).value
+    level = ctypes.c_int.from_buffer(common, COMMON_PRINT)
+    precise = ctypes.c_int.from_buffer(common, COMMON_PRINT + 4).value
+    if (maxrank, supernodal, level.value, precise) != (8, 1, 3, 0):
+        return False
+    level.value = 0
+    return True
+
+
+COMMON_MAXRANK, COMMON_SUPERNODAL, COMMON_PRINT = 32, 48, 144  # byte offsets in cholmod_common
 
 
 def _factor_pointer(symbolic: Any) -> int | None:
@@ -187,9 +206,7 @@ class Modified:
             return None
         change = found.function("change_factor", ctypes.c_int, *[ctypes.c_int] * 5,
                                 ctypes.c_void_p, ctypes.c_void_p)
-        with silenced():  # CHOLMOD's own message where memory runs out, from C
-            changed = change(CHOLMOD_REAL, 0, 0, 1, 1, address, found.common)
-        if not changed:
+        if not change(CHOLMOD_REAL, 0, 0, 1, 1, address, found.common):
             _free(fresh)
             return None
         set_pointer = ctypes.pythonapi.PyCapsule_SetPointer
@@ -226,10 +243,9 @@ class Modified:
                          indices.ctypes.data, None, values.ctypes.data, None, 0, 2,
                          CHOLMOD_REAL, 0, 1, 1)
         found = library()
-        with silenced():  # CHOLMOD prints its own warnings (a pivot not positive) from C
-            done = found.function("updown", ctypes.c_int, ctypes.c_int, ctypes.c_void_p,
-                                  ctypes.c_void_p, ctypes.c_void_p)(
-                int(add), ctypes.addressof(matrix), self.address, found.common)
+        done = found.function("updown", ctypes.c_int, ctypes.c_int, ctypes.c_void_p,
+                              ctypes.c_void_p, ctypes.c_void_p)(
+            int(add), ctypes.addressof(matrix), self.address, found.common)
         self.row_seconds = (time.perf_counter() - start) / C_rows.shape[0]
         self.updated += C_rows.shape[0]
         return bool(done)
@@ -267,9 +283,8 @@ def spare_analysis(symbolic: Any) -> int | None:
 
 def _copy(address: int) -> int | None:
     found = library()
-    with silenced():
-        copy = found.function("copy_factor", ctypes.c_void_p, ctypes.c_void_p,
-                              ctypes.c_void_p)(address, found.common)
+    copy = found.function("copy_factor", ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)(
+        address, found.common)
     return copy or None
 
 
