@@ -108,7 +108,7 @@ def library() -> Library | None:
         return None
     for path in _loaded_cholmod():
         try:
-            dll = ctypes.CDLL(path)
+            dll = ctypes.PyDLL(path)  # holds the GIL through each call: one Common, threads
             version = (ctypes.c_int * 3)()
             dll.cholmod_l_version.argtypes = [ctypes.c_void_p]
             dll.cholmod_l_version(version)
