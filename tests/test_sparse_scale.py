@@ -132,13 +132,13 @@ def always_update(monkeypatch) -> None:
     from contactqp.model import augmented
 
     monkeypatch.setattr(augmented, "ROW_SHARE", 0.0)
-    monkeypatch.setattr(augmented, "COPY_SHARE", 0.0)
+    monkeypatch.setattr(augmented, "TAKEOVER_SHARE", 0.0)
     monkeypatch.setattr(augmented, "SOLVES_AFTER", 0)
     monkeypatch.setattr(augmented, "UPDATE_ROWS", 0)
     by_updates = augmented._by_updates
 
     def timeless(model, target):  # no measured time stands in their way either
-        model.cache.copy_seconds = 0.0
+        model.cache.takeover_seconds = 0.0
         if model.cache.modified is not None:
             model.cache.modified.row_seconds = 0.0
             model.cache.modified.column_seconds = None

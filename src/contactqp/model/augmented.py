@@ -296,7 +296,7 @@ def _update(model: SparseModel, rows: np.ndarray) -> Update | None:
                   np.concatenate((rho[:added.size], -rho[added.size:])))
 
 
-COPY_SHARE = 0.5  # taking a factor over for rank updates (its change to a simplicial LDLᵀ),
+TAKEOVER_SHARE = 0.5  # taking a factor over for rank updates (its change to a simplicial LDLᵀ),
 # in numeric factorisations, before one is measured (measured 0.2-0.3 on 2D Hertz models)
 ROW_SHARE = 1 / 300  # an update's cost a row, in numeric factorisations, before one is
 # measured (measured 1/630 to 1/100: 2D and 3D Hertz models, 1.6·10⁴ to 8.8·10⁵ dofs)
@@ -336,7 +336,7 @@ def _by_updates(model: SparseModel, target: AugmentedSet):
     # sphere, 207 rows at 32 550 dofs)
     base = None if held is None else (held.rows, held.rho)
     if base is not None:
-        made = cache.copy_seconds if cache.copy_seconds is not None else COPY_SHARE * numeric
+        made = cache.takeover_seconds if cache.takeover_seconds is not None else TAKEOVER_SHARE * numeric
         rows = _changed(base[0], target.rows) * row
         options.append((rows, made + slower + rows, base))
     # the updates must beat this set's numeric factorisation; taking the factor over and the
@@ -347,7 +347,7 @@ def _by_updates(model: SparseModel, target: AugmentedSet):
         return None
     _, _, base = min(options, key=lambda option: option[1])
     if base is not None:
-        copy = _copy(model, base)
+        copy = _take_over(model, base)
         if copy is None:
             return None
     return copy if _move(model, copy, target) else None
@@ -375,7 +375,7 @@ def _changed(rows: np.ndarray, other: np.ndarray) -> int:
     return int(np.setxor1d(rows, other, assume_unique=True).size)
 
 
-def _copy(model: SparseModel, base: tuple[np.ndarray, np.ndarray]):
+def _take_over(model: SparseModel, base: tuple[np.ndarray, np.ndarray]):
     """The engine's numeric factor (of K + Cᵀ diag(ρ) C on the ``base`` rows and weights)
     taken over for rank updates (:meth:`contactqp.model.updown.Modified.taken_from`; the
     engine keeps its analysis and factors again when asked), kept as the model's modified
@@ -393,7 +393,7 @@ def _copy(model: SparseModel, base: tuple[np.ndarray, np.ndarray]):
     start = time.perf_counter()
     held, engine.holds = engine.holds, None  # whatever happens, its numeric factor goes
     copy = updown.Modified.taken_from(engine.symbolic, engine.n, engine.spare)
-    cache.copy_seconds = time.perf_counter() - start
+    cache.takeover_seconds = time.perf_counter() - start
     if copy is None:
         return None
     copy.holds, copy.rows, copy.rho = held, base[0].copy(), base[1].copy()

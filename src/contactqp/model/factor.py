@@ -366,7 +366,7 @@ class ColumnCache:
     modified: Any = None  # a set's factor that rank updates move to other sets
     # (contactqp.model.updown.Modified), once made
     set_updates: int = 0  # sets reached by rank updates of ``modified``
-    copy_seconds: float | None = None  # the last copy of a factor for ``modified``, timed
+    takeover_seconds: float | None = None  # the last factor taken over for ``modified``, timed
     updates_refused: bool = False  # an updated factor that did not resolve its set: none since
     compliance: np.ndarray | None = None  # W_ii per row where solved so far (NaN elsewhere;
     # CHOLMOD's factor: each is a solve, asked by the LCP's W and the check's own s)

@@ -5,13 +5,16 @@ numeric factorisation.
 cvxopt exposes CHOLMOD's analysis, numeric factorisation and solves (one column at a time),
 not its Modify module. Its wheels ship the whole CHOLMOD library, and this module calls the
 library cvxopt has loaded through ctypes (its wheels' copy beside it, else the one CHOLMOD
-the process has loaded), with its own ``cholmod_common``: ``cholmod_l_copy_factor`` of the factored set's
-supernodal factor, ``cholmod_l_change_factor`` to a simplicial LDLᵀ (updates need one),
-``cholmod_l_updown`` with the rows that enter (update) and leave (downdate) as the columns of
-a sparse matrix permuted as the factor is, and ``cholmod_l_solve`` of a block of columns.
+the process has loaded), with its own quiet ``cholmod_common`` and the interpreter lock held
+through each call (``ctypes.PyDLL``: one Common, one thread at a time). A set's numeric
+factor is taken over from cvxopt's (:meth:`Modified.taken_from`: ``cholmod_l_change_factor``
+to a simplicial LDLᵀ in place, as updates need one; cvxopt's factor gets a copy of the
+analysis back, made by ``cholmod_l_copy_factor`` before any numeric factorisation), then
+moved by ``cholmod_l_updown`` with the rows that enter (update) and leave (downdate) as the
+columns of a sparse matrix permuted as the factor is, and solved by ``cholmod_l_solve``.
 
 Measured on the Hertz cylinder of the scaling benchmark (3.3·10⁵ dofs, CHOLMOD 3.0.6 of
-cvxopt 1.3's wheel): a numeric factorisation 0.40 s; the copy and its change 0.26 s once; an
+cvxopt 1.3's wheel): a numeric factorisation 0.40 s; the change in place 0.11 s once; an
 update 1 ms a row (3D sphere, 9·10⁴ dofs: 8 ms a row against 2.9 s); a solve with the
 simplicial factor 0.067 s against the supernodal one's 0.048 s. A downdate of a row held by
 R loses about log₁₀(R/K) digits of that dof's pivot (cancellation); the set solves refine
@@ -56,17 +59,28 @@ class _Sparse(ctypes.Structure):
                 ("dtype", ctypes.c_int), ("sorted", ctypes.c_int), ("packed", ctypes.c_int)]
 
 
+_POINTER = ctypes.c_void_p
+SIGNATURES = {  # CHOLMOD's long-integer functions this module calls: (result, arguments)
+    "start": (ctypes.c_int, [_POINTER]),
+    "updown": (ctypes.c_int, [ctypes.c_int, _POINTER, _POINTER, _POINTER]),
+    "copy_factor": (_POINTER, [_POINTER, _POINTER]),
+    "change_factor": (ctypes.c_int, [ctypes.c_int] * 5 + [_POINTER, _POINTER]),
+    "solve": (ctypes.POINTER(_Dense), [ctypes.c_int, _POINTER, _POINTER, _POINTER]),
+    "free_factor": (ctypes.c_int, [_POINTER, _POINTER]),
+    "free_dense": (ctypes.c_int, [_POINTER, _POINTER]),
+}
+
+
 @dataclass(frozen=True, eq=False)
 class Library:
-    """CHOLMOD's long-integer functions this module calls, and its Common."""
+    """CHOLMOD's long-integer functions this module calls (their signatures set once), and
+    its Common."""
 
     dll: Any
     common: Any
 
-    def function(self, name: str, result: Any, *arguments: Any) -> Any:
-        call = getattr(self.dll, f"cholmod_l_{name}")
-        call.restype, call.argtypes = result, list(arguments)
-        return call
+    def function(self, name: str) -> Any:
+        return getattr(self.dll, f"cholmod_l_{name}")
 
 
 def _loaded_cholmod() -> list[str]:
@@ -114,14 +128,14 @@ def library() -> Library | None:
             dll.cholmod_l_version(version)
             if version[0] not in VERSIONS:
                 continue
-            for name in ("start", "updown", "copy_factor", "change_factor", "solve",
-                         "free_factor", "free_dense"):
-                getattr(dll, f"cholmod_l_{name}")
+            for name, (result, arguments) in SIGNATURES.items():
+                call = getattr(dll, f"cholmod_l_{name}")
+                call.restype, call.argtypes = result, arguments
         except (OSError, AttributeError):
             continue
         common = ctypes.create_string_buffer(COMMON_BYTES)
         found = Library(dll, common)
-        if not found.function("start", ctypes.c_int, ctypes.c_void_p)(common):
+        if not found.function("start")(common):
             continue
         if not _quiet(common):
             continue
@@ -187,7 +201,6 @@ class Modified:
     rho: np.ndarray = field(default_factory=lambda: np.zeros(0))
     row_seconds: float | None = None
     column_seconds: float | None = None  # a column of the last solve, timed
-    updated: int = 0  # rows changed since it was taken over
 
     @classmethod
     def taken_from(cls, symbolic: Any, n: int, spare: int) -> Modified | None:
@@ -204,17 +217,16 @@ class Modified:
         fresh = _copy(spare)
         if not fresh:
             return None
-        change = found.function("change_factor", ctypes.c_int, *[ctypes.c_int] * 5,
-                                ctypes.c_void_p, ctypes.c_void_p)
-        if not change(CHOLMOD_REAL, 0, 0, 1, 1, address, found.common):
-            _free(fresh)
+        if not found.function("change_factor")(CHOLMOD_REAL, 0, 0, 1, 1, address,
+                                                found.common):
+            release(fresh)
             return None
         set_pointer = ctypes.pythonapi.PyCapsule_SetPointer
         set_pointer.restype = ctypes.c_int
         set_pointer.argtypes = [ctypes.py_object, ctypes.c_void_p]
         set_pointer(symbolic, fresh)  # cvxopt frees it with the capsule
         made = cls(address, n, np.zeros(0, dtype=np.int64))
-        weakref.finalize(made, _free, address)
+        weakref.finalize(made, release, address)
         perm = ctypes.c_void_p.from_address(address + 2 * 8).value
         if not perm or ctypes.c_size_t.from_address(address).value != n:
             return None
@@ -243,11 +255,9 @@ class Modified:
                          indices.ctypes.data, None, values.ctypes.data, None, 0, 2,
                          CHOLMOD_REAL, 0, 1, 1)
         found = library()
-        done = found.function("updown", ctypes.c_int, ctypes.c_int, ctypes.c_void_p,
-                              ctypes.c_void_p, ctypes.c_void_p)(
-            int(add), ctypes.addressof(matrix), self.address, found.common)
+        done = found.function("updown")(int(add), ctypes.addressof(matrix), self.address,
+                                        found.common)
         self.row_seconds = (time.perf_counter() - start) / C_rows.shape[0]
-        self.updated += C_rows.shape[0]
         return bool(done)
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
@@ -258,17 +268,15 @@ class Modified:
         found = library()
         dense = _Dense(self.n, block.shape[1], block.size, self.n, block.ctypes.data, None,
                        CHOLMOD_REAL, 0)
-        solve = found.function("solve", ctypes.POINTER(_Dense), ctypes.c_int, ctypes.c_void_p,
-                               ctypes.c_void_p, ctypes.c_void_p)
-        answer = solve(CHOLMOD_A, self.address, ctypes.addressof(dense), found.common)
+        answer = found.function("solve")(CHOLMOD_A, self.address, ctypes.addressof(dense),
+                                         found.common)
         if not answer:
             from contactqp.errors import SolverError
 
             raise SolverError("CHOLMOD's solve with the updated factor failed")
         x = np.ctypeslib.as_array(ctypes.cast(answer.contents.x, ctypes.POINTER(ctypes.c_double)),
                                   shape=(block.shape[1], self.n)).T.copy()
-        found.function("free_dense", ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p)(
-            ctypes.byref(answer), found.common)
+        found.function("free_dense")(ctypes.byref(answer), found.common)
         self.column_seconds = (time.perf_counter() - start) / block.shape[1]
         return x.reshape(rhs.shape)
 
@@ -283,22 +291,14 @@ def spare_analysis(symbolic: Any) -> int | None:
 
 def _copy(address: int) -> int | None:
     found = library()
-    copy = found.function("copy_factor", ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)(
-        address, found.common)
-    return copy or None
+    return found.function("copy_factor")(address, found.common) or None
 
 
 def release(address: int) -> None:
     """Free a factor this module made (a copy of the analysis, a factor taken over)."""
-    _free(address)
-
-
-def _free(address: int) -> None:
     found = library()
     if found is not None:
-        pointer = ctypes.c_void_p(address)
-        found.function("free_factor", ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p)(
-            ctypes.byref(pointer), found.common)
+        found.function("free_factor")(ctypes.byref(ctypes.c_void_p(address)), found.common)
 
 
 __all__ = ["Modified", "factor_address", "library", "release", "spare_analysis"]
