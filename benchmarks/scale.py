@@ -32,8 +32,12 @@ with its reason).
 The floor of each mesh: the fastest factor-and-solve of K on the free dofs available here,
 measured in the same run: SuperLU with COLAMD, SuperLU with minimum degree in symmetric mode,
 qdldl's LDLᵀ (with AMD), and where installed CHOLMOD through cvxopt or cholespy and PARDISO
-through pypardiso (benchmarks/candidates.py; benchmarks/factorisations.py compares them). Every time is also a ratio to
-it.
+through pypardiso (benchmarks/candidates.py; benchmarks/factorisations.py compares them). Where
+that floor takes under PAIRED_UNDER s, the fastest candidate is timed again in each run's
+process, once before the run and once after each of its passes, and the run's ratio is to the
+median of those (``paired_floor_seconds``; ``mesh_ratio``: to the mesh's floor): on this VM
+the machine's speed drifts by a third over minutes, and a floor timed before a mesh's runs was
+1.0 s in one run and 1.4 s in the next. Elsewhere the ratio is to the mesh's floor.
 
 Built problems are kept in the cache folder (default DIR/problems) as .npz, so a second run
 does not mesh again. Writes scale.json, table.md, time_vs_dofs.png and time_vs_rows.png to DIR
@@ -64,7 +68,10 @@ from cases import in_child, machine
 TIMEOUT = {False: 60.0, True: 10.0}  # s per run (full, --quick)
 BUDGET = {False: 2400.0, True: 75.0}  # s: no run starts after this much of the whole run
 FLOOR_TIMES = 10.0  # ... or this many times the case's floor, where that is longer
-REPEATS, REPEAT_UNDER = 3, 2.0  # a run under REPEAT_UNDER s is timed as the median of REPEATS
+REPEATS = ((0.5, 9), (2.0, 3))  # a run (or a floor) whose first call takes under 0.5 s is
+# timed as the median of 9 calls, under 2 s of 3, else once: on this VM a 50 ms run moves by
+# a third from call to call (0.042-0.067 s for lagrange at 8 754 dofs, one process, quiet)
+PAIRED_UNDER = 5.0  # s: a mesh whose floor takes less has it timed again beside each run
 CHECK_ALLOWANCE = 60.0  # s more for a peer's run: the check of its answer, outside its time
 ZONE, APPROACH = 0.5, 0.01  # mm: the contact zone's (half-)width, δ
 METHODS = ("lagrange", "lagrange_amg", "semismooth_newton", "pgs", "penalty", "augmented", "qp")
@@ -172,14 +179,20 @@ def floors(problem: contactqp.Problem, repeats: int, limit: float) -> dict[str, 
     return found
 
 
-def timed(function: Any, repeats: int) -> float:
-    """The median wall time of ``repeats`` calls (seconds)."""
-    times = []
-    for _ in range(repeats):
+def timed(function: Any, repeats: int, fixed: bool = False) -> float:
+    """The median wall time of ``repeats`` calls (seconds), more where the first is short
+    (:func:`repeats_after`) unless ``fixed``."""
+    times: list[float] = []
+    while len(times) < max(repeats, repeats_after(times[0]) if times and not fixed else 1):
         start = time.perf_counter()
         function()
         times.append(time.perf_counter() - start)
     return statistics.median(times)
+
+
+def repeats_after(first: float) -> int:
+    """How many calls time a run or a floor whose first call took ``first`` s (REPEATS)."""
+    return next((count for under, count in REPEATS if first < under), 1)
 
 
 def reduced_qp(problem: contactqp.Problem) -> tuple[Any, ...]:
@@ -234,21 +247,31 @@ def method(problem: contactqp.Problem, name: str) -> dict[str, Any]:
             "contact_force": np.asarray(result.contact_force)}
 
 
-def run(problem: contactqp.Problem, label: str) -> dict[str, Any]:
-    """One run, timed as the floor is: where the first takes under REPEAT_UNDER s, the median
-    of REPEATS runs (each on a copy of the problem as it came, with nothing of the runs
+def run(problem: contactqp.Problem, label: str, floor: Any = None) -> dict[str, Any]:
+    """One run, timed as the floor is: the median of as many runs as the first's time asks
+    (:func:`repeats_after`; each on a copy of the problem as it came, with nothing of the runs
     before it kept: no model, no factorisation), so that a short run is not judged by its
     first pass through cold caches and fresh pages against a floor that is a median too.
-    ``first_seconds``: the first run's time."""
+    ``first_seconds``: the first run's time. ``floor`` (the mesh's fastest factor-and-solve,
+    a call): timed once before the runs and once after each, in the same process, its median
+    ``paired_floor_seconds`` (:func:`measure_case`)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the solvers' own warnings: the check decides
         try:
+            floors_seen = [] if floor is None else [timed(floor, 1, fixed=True)]
             found = once(copy.copy(problem), label)
-            if found.get("seconds", math.inf) < REPEAT_UNDER:
-                times = [found["seconds"]] + [once(copy.copy(problem), label)["seconds"]
-                                              for _ in range(REPEATS - 1)]
+            times = [found.get("seconds", math.inf)]
+            if floor is not None:
+                floors_seen.append(timed(floor, 1, fixed=True))
+            for _ in range(repeats_after(times[0]) - 1):
+                times.append(once(copy.copy(problem), label)["seconds"])
+                if floor is not None:
+                    floors_seen.append(timed(floor, 1, fixed=True))
+            if len(times) > 1:
                 found = {**found, "first_seconds": times[0],
                          "seconds": statistics.median(times)}
+            if floors_seen:
+                found["paired_floor_seconds"] = statistics.median(floors_seen)
             return found
         except Exception as error:  # noqa: BLE001 (a crash is a result here, with its reason)
             return {"refused": f"raised {type(error).__name__}: {error}"[:200]}
@@ -258,13 +281,26 @@ def once(problem: contactqp.Problem, label: str) -> dict[str, Any]:
     return peer(problem, label) if label in PEERS else method(problem, label)
 
 
-def isolated(timeout: float, problem: contactqp.Problem, label: str) -> dict[str, Any]:
+def isolated(timeout: float, problem: contactqp.Problem, label: str, floor: Any = None
+             ) -> dict[str, Any]:
     """run() in a forked child stopped after ``timeout`` s (:func:`cases.in_child`)."""
     try:
-        found = in_child(timeout, run, problem, label)
+        found = in_child(timeout, run, problem, label, floor)
     except EOFError:  # the child died without an answer (a crash in compiled code)
         return {"refused": "the process died"}
     return found or {"skipped": f"time limit: stopped after {timeout:.0f} s"}
+
+
+def paired_floor(problem: contactqp.Problem, label: str) -> Any:
+    """The mesh's fastest factor-and-solve of K (FLOOR_CANDIDATES' ``label``) as a call, K
+    handed over beforehand as :func:`floors` does."""
+    name = next(name for name, shown in FLOOR_CANDIDATES.items() if shown == label)
+    free = free_dofs(problem)
+    K = sp.csc_matrix(sp.csr_array(problem.K)[free][:, free])
+    K.sort_indices()
+    factor, solve = factor_and_solve(name, K)
+    rhs = np.ones(free.size)
+    return lambda: solve(factor(), rhs)
 
 
 def rows_in_contact(force: np.ndarray) -> int:
@@ -319,13 +355,19 @@ def measure_case(case: Case, problem: contactqp.Problem, progress: Progress,
     # floors alone take tens of seconds
     limit = max(progress.limit, FLOOR_TIMES * base)
     described["timeout_seconds"] = limit
+    # the floor again beside each run, in its process (PAIRED_UNDER): the machine's speed
+    # drifts by a third over minutes, and the mesh's floor was timed before all its runs
+    floor = paired_floor(problem, described["floor"]) if base < PAIRED_UNDER else None
     for label in labels:
         reason = progress.why_skip(case, label)
-        # a peer's limit is on its solve: its check, after, has CHECK_ALLOWANCE more
-        allowed = limit + (CHECK_ALLOWANCE if label in PEERS else 0.0)
-        found = {"skipped": reason} if reason else isolated(allowed, problem, label)
+        # a peer's limit is on its solve: its check, after, has CHECK_ALLOWANCE more; the
+        # paired floors have up to 2 + 9 floors more
+        allowed = (limit + (CHECK_ALLOWANCE if label in PEERS else 0.0)
+                   + (11.0 * base if floor is not None else 0.0))
+        found = {"skipped": reason} if reason else isolated(allowed, problem, label, floor)
         if "seconds" in found:
-            found["ratio"] = found["seconds"] / base
+            found["mesh_ratio"] = found["seconds"] / base
+            found["ratio"] = found["seconds"] / found.get("paired_floor_seconds", base)
             if found["verified"]:
                 forces.append(found["contact_force"])
         elif "time limit" in found.get("skipped", ""):
@@ -369,7 +411,9 @@ def table(cases: list[dict[str, Any]]) -> str:
                      + " | ".join(cell(c["runs"].get(label, {"skipped": "not run"}), label)
                                   for label in labels) + " |")
     return ("\n".join(lines).replace(",", " ") + "\n\nEach cell: time / the floor (the fastest "
-            "factor-and-solve of K on the free dofs in the same run); ✓ verified by "
+            "factor-and-solve of K on the free dofs in the same run; where it takes under "
+            f"{PAIRED_UNDER:g} s, timed again in the run's own process, before it and after "
+            "each pass); ✓ verified by "
             "contactqp's check, ✗ not verified. contactqp's methods end to end with their "
             "check; Clarabel, OSQP and PIQP from the Problem's arrays to their answer, the "
             "check apart.\n")
