@@ -158,19 +158,8 @@ def floors(problem: contactqp.Problem, repeats: int, limit: float) -> dict[str, 
     benchmarks/hertz.py), qdldl's LDLᵀ with AMD (its upper triangle), and where installed
     CHOLMOD through cvxopt or cholespy and PARDISO through pypardiso; one not done within
     ``limit`` s is left out."""
-    free = free_dofs(problem)
-    K = sp.csc_matrix(sp.csr_array(problem.K)[free][:, free])
-    K.sort_indices()
-    rhs = np.ones(free.size)
-    candidates = {}
-    for name, label in FLOOR_CANDIDATES.items():
-        try:
-            factor, solve = factor_and_solve(name, K)
-        except ImportError:  # not installed here
-            continue
-        candidates[label] = (lambda factor=factor, solve=solve: solve(factor(), rhs))
     found = {}
-    for name, job in candidates.items():
+    for name, job in floor_calls(problem).items():
         # each in a child stopped after the run's time limit: SuperLU at 9·10⁵ dofs takes
         # many minutes and gigabytes, and a floor past the limit is no floor
         seconds = in_child(limit, timed, job, repeats)
@@ -179,15 +168,37 @@ def floors(problem: contactqp.Problem, repeats: int, limit: float) -> dict[str, 
     return found
 
 
-def timed(function: Any, repeats: int, fixed: bool = False) -> float:
+def floor_calls(problem: contactqp.Problem) -> dict[str, Any]:
+    """Each floor candidate installed here as a call (FLOOR_CANDIDATES' labels): a
+    factor-and-solve of K on the free dofs, K handed over beforehand."""
+    free = free_dofs(problem)
+    K = sp.csc_matrix(sp.csr_array(problem.K)[free][:, free])
+    K.sort_indices()
+    rhs = np.ones(free.size)
+    calls = {}
+    for name, label in FLOOR_CANDIDATES.items():
+        try:
+            factor, solve = factor_and_solve(name, K)
+        except ImportError:  # not installed here
+            continue
+        calls[label] = (lambda factor=factor, solve=solve: solve(factor(), rhs))
+    return calls
+
+
+def timed(function: Any, repeats: int) -> float:
     """The median wall time of ``repeats`` calls (seconds), more where the first is short
-    (:func:`repeats_after`) unless ``fixed``."""
-    times: list[float] = []
-    while len(times) < max(repeats, repeats_after(times[0]) if times and not fixed else 1):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
+    (:func:`repeats_after`)."""
+    times = [seconds_of(function)]
+    while len(times) < max(repeats, repeats_after(times[0])):
+        times.append(seconds_of(function))
     return statistics.median(times)
+
+
+def seconds_of(function: Any) -> float:
+    """The wall time of one call (seconds)."""
+    start = time.perf_counter()
+    function()
+    return time.perf_counter() - start
 
 
 def repeats_after(first: float) -> int:
@@ -258,15 +269,16 @@ def run(problem: contactqp.Problem, label: str, floor: Any = None) -> dict[str, 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the solvers' own warnings: the check decides
         try:
-            floors_seen = [] if floor is None else [timed(floor, 1, fixed=True)]
+            floors_seen: list[float] = []
+            pair = (lambda: None) if floor is None else (
+                lambda: floors_seen.append(seconds_of(floor)))
+            pair()
             found = once(copy.copy(problem), label)
             times = [found.get("seconds", math.inf)]
-            if floor is not None:
-                floors_seen.append(timed(floor, 1, fixed=True))
+            pair()
             for _ in range(repeats_after(times[0]) - 1):
                 times.append(once(copy.copy(problem), label)["seconds"])
-                if floor is not None:
-                    floors_seen.append(timed(floor, 1, fixed=True))
+                pair()
             if len(times) > 1:
                 found = {**found, "first_seconds": times[0],
                          "seconds": statistics.median(times)}
@@ -289,18 +301,6 @@ def isolated(timeout: float, problem: contactqp.Problem, label: str, floor: Any 
     except EOFError:  # the child died without an answer (a crash in compiled code)
         return {"refused": "the process died"}
     return found or {"skipped": f"time limit: stopped after {timeout:.0f} s"}
-
-
-def paired_floor(problem: contactqp.Problem, label: str) -> Any:
-    """The mesh's fastest factor-and-solve of K (FLOOR_CANDIDATES' ``label``) as a call, K
-    handed over beforehand as :func:`floors` does."""
-    name = next(name for name, shown in FLOOR_CANDIDATES.items() if shown == label)
-    free = free_dofs(problem)
-    K = sp.csc_matrix(sp.csr_array(problem.K)[free][:, free])
-    K.sort_indices()
-    factor, solve = factor_and_solve(name, K)
-    rhs = np.ones(free.size)
-    return lambda: solve(factor(), rhs)
 
 
 def rows_in_contact(force: np.ndarray) -> int:
@@ -357,7 +357,7 @@ def measure_case(case: Case, problem: contactqp.Problem, progress: Progress,
     described["timeout_seconds"] = limit
     # the floor again beside each run, in its process (PAIRED_UNDER): the machine's speed
     # drifts by a third over minutes, and the mesh's floor was timed before all its runs
-    floor = paired_floor(problem, described["floor"]) if base < PAIRED_UNDER else None
+    floor = floor_calls(problem)[described["floor"]] if base < PAIRED_UNDER else None
     for label in labels:
         reason = progress.why_skip(case, label)
         # a peer's limit is on its solve: its check, after, has CHECK_ALLOWANCE more; the

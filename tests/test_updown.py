@@ -148,18 +148,11 @@ THREADED = """
 import sys, threading
 import numpy as np
 import scipy.sparse as sp
+import pytest
 import contactqp
-from contactqp.model import augmented
-# every set after the first by updates, whatever they cost (as always_update)
-augmented.ROW_SHARE = augmented.TAKEOVER_SHARE = augmented.SOLVES_AFTER = 0
-augmented.UPDATE_ROWS = 0
-by_updates = augmented._by_updates
-def timeless(model, target):
-    model.cache.takeover_seconds = 0.0
-    if model.cache.modified is not None:
-        model.cache.modified.row_seconds, model.cache.modified.column_seconds = 0.0, None
-    return by_updates(model, target)
-augmented._by_updates = timeless
+sys.path.insert(0, TESTS)
+from test_sparse_scale import always_update
+always_update(pytest.MonkeyPatch())  # every set after the first by updates, whatever they cost
 
 def chain(n, seed):
     rng = np.random.default_rng(seed)
@@ -197,10 +190,12 @@ def test_two_threads_solving_through_updates_at_once(tmp_path):
     child process, so that a crash fails this test, not the run."""
     import subprocess
     import sys
+    from pathlib import Path
 
     sizes, solves = 30, 2 * 3 * 30
     script = tmp_path / "threaded.py"
-    script.write_text(THREADED.replace("SIZES", str(sizes)))
+    script.write_text(THREADED.replace("SIZES", str(sizes)).replace(
+        "TESTS", repr(str(Path(__file__).parent))))
     done = subprocess.run([sys.executable, str(script)], check=False, capture_output=True,
                           text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]

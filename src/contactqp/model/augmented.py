@@ -336,7 +336,8 @@ def _by_updates(model: SparseModel, target: AugmentedSet):
     # sphere, 207 rows at 32 550 dofs)
     base = None if held is None else (held.rows, held.rho)
     if base is not None:
-        made = cache.takeover_seconds if cache.takeover_seconds is not None else TAKEOVER_SHARE * numeric
+        made = (cache.takeover_seconds if cache.takeover_seconds is not None
+                else TAKEOVER_SHARE * numeric)
         rows = _changed(base[0], target.rows) * row
         options.append((rows, made + slower + rows, base))
     # the updates must beat this set's numeric factorisation; taking the factor over and the
