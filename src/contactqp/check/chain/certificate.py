@@ -93,9 +93,12 @@ def error_bounds(layout: Layout, u: np.ndarray, lam: np.ndarray, links: np.ndarr
     # smaller than that would close, and take what closing the rest of the move needs
     # (measured: quadprog left a wall 2.5e-12 m open beside one held 1.7e-11 m off, across
     # an element of 7e13 N/m, 963 N off and verified without this)
+    # (the ends of a bar contact that pushes, or that penetrates and is closed by the move,
+    # move together: an open row at one end pushes both back)
     closing = 0.0 if equality else _closing(layout, moves, row_nodes, rows,
                                             np.where(pushing, np.inf, standing), held, s,
-                                            pushing)
+                                            pushing, (pushing | (pen > 0.0))
+                                            if layout.scene.contacts else None)
     # ... and a contact past its gap with no force may take the force of a row that holds
     # its end, round the loop of rows (contactqp.check.chain.self_stress.rerouted_forces)
     rerouted = 0.0 if equality else rerouted_forces(layout, lam, pen, pushing, u, U)
@@ -279,20 +282,28 @@ def _largest_at(into: np.ndarray, at: np.ndarray, values: np.ndarray) -> None:
 
 def _closing(layout: Layout, moves: tuple[np.ndarray, np.ndarray], row_nodes: np.ndarray,
              rows: np.ndarray, stand_off: np.ndarray, held_before: np.ndarray, s: np.ndarray,
-             pushing: np.ndarray) -> float:
+             pushing: np.ndarray, tying: np.ndarray | None) -> float:
     """The largest force an open contact would take if the held nodes at the ends of its run
     moved as ``moves`` says ((sorted nodes, move of each, m)): (move − its stand-off)⁺ × the
-    stiffness it sees with those nodes held (``s`` where they are ``held_before``).
+    stiffness it sees with those nodes held (``s`` where they are ``held_before``), the ends of
+    each ``tying`` bar contact moving as one (:func:`tied_row_stiffness`; None: walls alone).
     (Measured: DAQP, a bar held by its walls alone, random_scene seed 39063: a press fit of
     2.1e-12 m across an element of 2.9e7 N/m left open, its wall's stiffness taken with the
     penetrating node free, through an element of 153 N/m: 6.2e-5 N off against a bound of
-    6.9e-7 N.)"""
+    6.9e-7 N. And lemke, random_scene seed 1198665058: a zero-gap bar contact 1.1e-7 m past
+    with no force, closed by moving its soft end onto a touching wall; that wall's stiffness
+    taken at its node alone, 1.1e6 N/m, where pushing the node back pushes the contact's
+    other end too, across an element of 1.8e10 N/m: 1 955 N off, verified with a force bound
+    of 0.24 N.)"""
     held, shift = moves
     if held.size == 0 or not np.isfinite(stand_off).any():
         return 0.0
     if largest(shift) <= np.min(stand_off):  # no held node moves as far as any open gap
         return 0.0
-    if held.size != held_before.size:  # a penetrating open row's node is held as well
+    tied = None if tying is None else tied_row_stiffness(layout, held, pushing, tying)
+    if tied is not None:
+        s = tied
+    elif held.size != held_before.size:  # a penetrating open row's node is held as well
         s = row_stiffness(layout, held, pushing)
     bar = layout.bar_of(row_nodes)
     held_bar = layout.bar_of(held)
@@ -307,7 +318,9 @@ def _closing(layout: Layout, moves: tuple[np.ndarray, np.ndarray], row_nodes: np
     else:
         per_row = np.zeros(stand_off.size)
         _largest_at(per_row, rows, induced)
-    return largest(np.maximum(per_row - stand_off, 0.0) * np.where(np.isfinite(stand_off), s, 0.0))
+    excess = np.maximum(per_row - stand_off, 0.0)
+    closes = (excess > 0.0) & np.isfinite(stand_off)  # (a rigid row that does not close: 0)
+    return largest(np.where(closes, excess * s, 0.0))
 
 
 def row_stiffness(layout: Layout, held: np.ndarray, pushing: np.ndarray,
@@ -326,6 +339,44 @@ def row_stiffness(layout: Layout, held: np.ndarray, pushing: np.ndarray,
     row, node_stiffness = kept(layout, kind, held,
                                lambda: _row_stiffness(layout, held, pushing, walls_only))
     return (row, node_stiffness) if ends else row
+
+
+def tied_row_stiffness(layout: Layout, held: np.ndarray, pushing: np.ndarray,
+                       tying: np.ndarray) -> np.ndarray | None:
+    """:func:`row_stiffness` where the two ends of every ``tying`` bar contact (one bool per
+    row) move as one: an end of another row at a node so tied sees the stiffness of the whole
+    group of nodes the tying contacts join (the sum of theirs; its own where one of them is a
+    support). A tying contact's own row keeps its ends' stiffness. None where no other row
+    has an end at a tied node (nothing changes)."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    rows, row_nodes, _, gaps = layout.rows
+    ties = tying[rows] & (rows >= len(layout.scene.walls))
+    if not ties.any():
+        return None
+    # a bar contact's two entries, in row order: its a end, then its b end (Layout.rows)
+    ends = row_nodes[ties][np.argsort(rows[ties], kind="stable")]
+    nodes, ends = np.unique(ends, return_inverse=True)  # the tied nodes; each end's place
+    place = np.searchsorted(nodes, row_nodes)
+    place[place == nodes.size] = 0
+    at = (nodes[place] == row_nodes) & ~ties
+    if not at.any():
+        return None
+    _, node_stiffness = row_stiffness(layout, held, pushing, ends=True)
+    graph = sp.coo_array((np.ones(ends.size // 2), (ends[0::2], ends[1::2])),
+                         shape=(nodes.size, nodes.size))
+    label = connected_components(graph, directed=False)[1]
+    group = np.bincount(label, seen_stiffness(layout, held, nodes))
+    # a group with a support in it does not move: its moves are its rows' own penetrations,
+    # and there each end keeps its own stiffness (a rigid group would make any round-off
+    # move infinitely costly where zero gaps clamp a node between a wall and a supported node)
+    grounded = np.zeros(group.size, dtype=bool)
+    grounded[label[in_set(layout.n_nodes, nodes, layout.support_nodes)]] = True
+    at &= np.isfinite(node_stiffness) & ~grounded[label[place]]
+    node_stiffness = np.where(at, group[label[place]], node_stiffness)
+    with np.errstate(divide="ignore"):
+        return 1.0 / np.bincount(rows, 1.0 / node_stiffness, minlength=gaps.size)
 
 
 def _row_stiffness(layout: Layout, held: np.ndarray, pushing: np.ndarray, walls_only: bool
