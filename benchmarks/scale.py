@@ -23,7 +23,12 @@ backend), end to end (model, method, check); and Clarabel, OSQP and PIQP called 
 (through qpsolvers, at their default settings) on the same QP written on the free dofs,
 minimise ½ xᵀK_ff x + (K_fp u_p − f_f)ᵀx subject to C_f x ≤ g − C_p u_p, timed from the
 Problem's arrays to the solver's answer; each peer's answer is then judged by the same check,
-contactqp.check(problem, u, contact_force), outside its time. Each run goes to a forked child
+contactqp.check(problem, u, contact_force), outside its time. With ``--runs`` naming
+clarabel_tight, osqp_tight or piqp_tight, the same peer is called again with its tolerances
+tightened a decade at a time (TIGHTER: 1e-5 to 1e-10; OSQP polishing its answer) until the
+check verifies its answer: the run's time is that of the loosest verified setting (timed as
+every run), ``tolerance`` the setting and ``ladder_seconds`` the whole search; a peer that no
+setting verifies is recorded with the last one's reason. Each run goes to a forked child
 stopped after TIMEOUT s or FLOOR_TIMES times the case's floor, the longer (a peer's run
 CHECK_ALLOWANCE s more, for the check of its answer); a run stopped so is not started again on
 the sweep's larger cases, and no run starts once the whole run's BUDGET is spent (each skip
@@ -78,6 +83,13 @@ METHODS = ("lagrange", "lagrange_amg", "semismooth_newton", "pgs", "penalty", "a
 ENGINES = {"lagrange_amg": ("lagrange", "amg")}  # a run's method and engine, where not direct
 SHORT = {"semismooth_newton": "ssn", "lagrange_amg": "lagrange (amg)"}  # the table's columns
 PEERS = ("clarabel", "osqp", "piqp")
+TIGHT = ("clarabel_tight", "osqp_tight", "piqp_tight")  # the peers, tightened until verified
+TIGHTER = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)  # the tolerances a tightened peer tries
+SETTINGS = {  # each peer's tolerances at t, as qpsolvers passes them on
+    "clarabel": lambda t: {"tol_gap_abs": t, "tol_gap_rel": t, "tol_feas": t,
+                           "tol_ktratio": t},
+    "osqp": lambda t: {"eps_abs": t, "eps_rel": t, "polish": True, "max_iter": 10**6},
+    "piqp": lambda t: {"eps_abs": t, "eps_rel": t}}
 FLOOR_CANDIDATES = {  # benchmarks/candidates.py's names: the floor's
     "superlu_colamd": "SuperLU COLAMD", "superlu_mmd": "SuperLU MMD symmetric",
     "qdldl": "qdldl LDLT", "cvxopt": "CHOLMOD (cvxopt)", "cholespy": "CHOLMOD (cholespy)",
@@ -218,13 +230,17 @@ def reduced_qp(problem: contactqp.Problem) -> tuple[Any, ...]:
     return P, q, G, h, free
 
 
-def peer(problem: contactqp.Problem, solver: str) -> dict[str, Any]:
-    """Clarabel, OSQP or PIQP on the same QP, timed, then judged by contactqp's check."""
+def peer(problem: contactqp.Problem, solver: str, tolerance: float | None = None
+         ) -> dict[str, Any]:
+    """Clarabel, OSQP or PIQP on the same QP, timed, then judged by contactqp's check; at
+    its default settings, or with its tolerances at ``tolerance`` (SETTINGS)."""
     import qpsolvers
 
+    settings = {} if tolerance is None else SETTINGS[solver](tolerance)
     start = time.perf_counter()
     P, q, G, h, free = reduced_qp(problem)
-    solution = qpsolvers.solve_problem(qpsolvers.Problem(P, q, G, h), solver=solver)
+    solution = qpsolvers.solve_problem(qpsolvers.Problem(P, q, G, h), solver=solver,
+                                       **settings)
     seconds = time.perf_counter() - start
     if solution.x is None or solution.z is None:
         return {"seconds": seconds, "verified": False, "why": f"{solver}: no answer",
@@ -266,6 +282,7 @@ def run(problem: contactqp.Problem, label: str, floor: Any = None) -> dict[str, 
     ``first_seconds``: the first run's time. ``floor`` (the mesh's fastest factor-and-solve,
     a call): timed once before the runs and once after each, in the same process, its median
     ``paired_floor_seconds`` (:func:`measure_case`)."""
+    _LOOSEST.clear()  # a tightened peer searches its setting anew on each case
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the solvers' own warnings: the check decides
         try:
@@ -290,7 +307,27 @@ def run(problem: contactqp.Problem, label: str, floor: Any = None) -> dict[str, 
 
 
 def once(problem: contactqp.Problem, label: str) -> dict[str, Any]:
+    if label in TIGHT:
+        return tightened(problem, label.removesuffix("_tight"))
     return peer(problem, label) if label in PEERS else method(problem, label)
+
+
+_LOOSEST: dict[str, float] = {}  # a tightened peer's loosest verified tolerance, in its run
+
+
+def tightened(problem: contactqp.Problem, solver: str) -> dict[str, Any]:
+    """The peer at the loosest of TIGHTER whose answer the check verifies: searched on the
+    run's first pass (``ladder_seconds``), that setting alone on its later passes."""
+    if solver in _LOOSEST:
+        return {**peer(problem, solver, _LOOSEST[solver]), "tolerance": _LOOSEST[solver]}
+    spent = 0.0
+    for tolerance in TIGHTER:
+        found = peer(copy.copy(problem), solver, tolerance)
+        spent += found["seconds"] + found.get("check_seconds", 0.0)
+        if found["verified"]:
+            _LOOSEST[solver] = tolerance
+            break
+    return {**found, "tolerance": tolerance, "ladder_seconds": spent}
 
 
 def isolated(timeout: float, problem: contactqp.Problem, label: str, floor: Any = None
@@ -363,6 +400,7 @@ def measure_case(case: Case, problem: contactqp.Problem, progress: Progress,
         # a peer's limit is on its solve: its check, after, has CHECK_ALLOWANCE more; the
         # paired floors have up to 2 + 9 floors more
         allowed = (limit + (CHECK_ALLOWANCE if label in PEERS else 0.0)
+                   + (len(TIGHTER) * (limit + CHECK_ALLOWANCE) if label in TIGHT else 0.0)
                    + (11.0 * base if floor is not None else 0.0))
         found = {"skipped": reason} if reason else isolated(allowed, problem, label, floor)
         if "seconds" in found:
@@ -395,12 +433,14 @@ def cell(found: dict[str, Any], label: str = "") -> str:
         return ("time limit" if "time limit" in reason else "not run (budget)"
                 if "budget" in reason else reason.split(":")[0])
     sweeps = f" ({found['iterations']:,} sweeps)" if label == "pgs" else ""
-    return f"{found['ratio']:.3g}×" + (" ✓" if found["verified"] else " ✗") + sweeps
+    setting = f" at {found['tolerance']:g}" if label in TIGHT else ""
+    return f"{found['ratio']:.3g}×" + (" ✓" if found["verified"] else " ✗") + sweeps + setting
 
 
 def table(cases: list[dict[str, Any]]) -> str:
     """Markdown: one line per case, each run's time over the floor and its verdict."""
-    labels = (*METHODS, *PEERS)
+    labels = (*METHODS, *PEERS, *(label for label in TIGHT
+                                   if any(label in c["runs"] for c in cases)))
     head = ("| sweep | dofs | rows | in contact | floor (s) | "
             + " | ".join(SHORT.get(label, label) for label in labels) + " |")
     lines = [head, "|---" * (5 + len(labels)) + "|"]
@@ -416,12 +456,14 @@ def table(cases: list[dict[str, Any]]) -> str:
             "each pass); ✓ verified by "
             "contactqp's check, ✗ not verified. contactqp's methods end to end with their "
             "check; Clarabel, OSQP and PIQP from the Problem's arrays to their answer, the "
-            "check apart.\n")
+            "check apart (…_tight: at the loosest of their tolerances 1e-5 … 1e-10 that "
+            "verifies, its setting after the time).\n")
 
 
 COLOURS = {"lagrange": "tab:blue", "lagrange_amg": "tab:pink", "semismooth_newton": "tab:cyan", "pgs": "tab:olive",
            "penalty": "tab:orange", "augmented": "tab:green",
-           "qp": "tab:purple", "clarabel": "tab:red", "osqp": "tab:brown", "piqp": "tab:gray"}
+           "qp": "tab:purple", "clarabel": "tab:red", "osqp": "tab:brown", "piqp": "tab:gray",
+           "clarabel_tight": "salmon", "osqp_tight": "peru", "piqp_tight": "silver"}
 
 
 def chart(cases: list[dict[str, Any]], kind: str, path: Path) -> None:
@@ -482,7 +524,8 @@ def main() -> None:
     parser.add_argument("--cache", default="", help="built problems (default OUT/problems)")
     parser.add_argument("--sweeps", default="dofs2d,dofs3d,rows2d,rows3d")
     parser.add_argument("--runs", default=",".join((*METHODS, *PEERS)),
-                        help="the runs to make on each case (the others are left out)")
+                        help="the runs to make on each case (the others are left out; "
+                             "also " + ", ".join(TIGHT) + ")")
     parser.add_argument("--timeout", type=float, default=0.0,
                         help=f"s per run (default {TIMEOUT[False]:g}, --quick {TIMEOUT[True]:g})")
     parser.add_argument("--redraw", default="",
@@ -504,7 +547,8 @@ def main() -> None:
     chosen = [c for c in CASES if c.sweep in sweeps and c.runs_in in wanted]
     warm_up(problem_of(CASES[0], cache))
     progress = Progress(limit, start + budget)
-    labels = tuple(label for label in (*METHODS, *PEERS) if label in args.runs.split(","))
+    labels = tuple(label for label in (*METHODS, *PEERS, *TIGHT)
+                   if label in args.runs.split(","))
     cases = [measure_case(c, problem_of(c, cache), progress, labels) for c in chosen]
     out.mkdir(parents=True, exist_ok=True)
     document = {"machine": machine(), "quick": args.quick, "timeout_seconds": limit,

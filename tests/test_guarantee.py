@@ -138,6 +138,8 @@ def test_a_contact_left_past_its_gap_onto_a_touching_wall_is_not_verified():
     found = contactqp.check(scene, u, np.zeros(2))
     assert not found.verified
     assert found.force_error_bound >= P  # the answer is P off
+    # and the same answer to the scene's problem (the general certificate), alike
+    assert not contactqp.check(contactqp.problem_from_scene(scene), u, np.zeros(2)).verified
     for method in ("lagrange", "lemke", "augmented", "semismooth_newton", "qp"):
         result = solve_quietly(scene, method, {}, "full")
         if result.verified:
