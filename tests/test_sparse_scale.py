@@ -11,6 +11,8 @@ Glossary: K stiffness, f loads, C rows, g gaps, A the rows held, λ their forces
 when they push), u the displacements, R = diag ρ the rows' augmented stiffness.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -452,3 +454,73 @@ def test_memory_where_the_system_does_not_say_what_is_available(monkeypatch):
     page = os.sysconf("SC_PAGE_SIZE")
     assert found == os.sysconf("SC_PHYS_PAGES") * page
     assert found >= os.sysconf("SC_AVPHYS_PAGES") * page
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_rows_on_dofs_of_their_own_solve_their_gram_matrix_as_lapack_does(seed):
+    """Rows that share no dof (C_A C_Aᵀ diagonal, as the Hertz models' rows are) are solved by
+    the diagonal, with no sparse LU: (C_A C_Aᵀ)⁻¹b equals LAPACK's dense solve of C_A C_Aᵀ
+    (1e-13 per entry) over entries from 1e-100 to 1e100. Rows that share a dof take the LU and
+    still equal it; an empty row is a dependent one (None, with no warning)."""
+    from contactqp.model.saddle import DiagonalFactor, gram_factor
+
+    rng = np.random.default_rng(seed)
+    m, n = 9, 30
+    dofs = rng.permutation(n)
+    C = np.zeros((m, n))
+    for i, own in enumerate(np.array_split(dofs[: 2 * m], m)):  # 2 dofs of its own each
+        C[i, own] = rng.choice([-1.0, 1.0], own.size) * 10.0 ** rng.uniform(-100, 100, own.size)
+    b = rng.standard_normal(m)
+    for rows, diagonal in ((C, True), (np.vstack((C, C[0] + C[1])), False)):
+        gram = rows @ rows.T
+        found = gram_factor(sp.csr_array(rows))
+        if not diagonal:  # a row that repeats two others: dependent
+            assert found is None
+            shared = rows.copy()
+            shared[-1] = 0.0
+            shared[-1, [dofs[0], dofs[-1]]] = 1.0  # a dof of row 0's and one of its own
+            gram = shared @ shared.T
+            found = gram_factor(sp.csr_array(shared))
+        factor, scale = found
+        assert isinstance(factor, DiagonalFactor) == diagonal
+        rhs = rng.standard_normal(gram.shape[0]) if not diagonal else b
+        x = scale * factor.solve(scale * rhs)
+        exact = np.linalg.solve(gram, rhs)
+        assert np.all(np.abs(x - exact) <= 1e-13 * np.abs(exact) + 1e-300)
+    empty = C.copy()
+    empty[3] = 0.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert gram_factor(sp.csr_array(empty)) is None
+
+
+def test_rows_far_from_unit_entries_are_solved_past_the_steps_noise():
+    """Rows whose entries are 1e30 and 1e-30 beside rows of order 1, on a chain of springs of
+    order 1e20 (hostile: within the magnitudes a Problem takes). Lagrange's answer is verified,
+    and it is the saddle-point system's on its set solved densely by LAPACK with each row scaled
+    to a unit entry (u to 1e-9 of its largest, the force each row puts on its dof, λ_i c_i, to
+    1e-9 of the largest). Uzawa's steps that stopped where their geometric tail, measured
+    against F, was under 1e-15 left this answer 8.6e41 of F out of balance."""
+    rng = np.random.default_rng(5)
+    n = 30
+    for scale in (1e-80, 1e-20, 1.0, 1e20):  # the draws of the hostile audit's run: its last
+        k = rng.uniform(1.0, 10.0, n + 1) * scale
+        f = rng.uniform(-1.0, 1.0, n) * scale
+    K = sp.csr_array(sp.diags([-k[1:-1], k[:-1] + k[1:], -k[1:-1]], [-1, 0, 1]))
+    dofs = np.array([2, 7, 11, 15, 20, 25])
+    entries = np.array([1.0, -1.0, 1e-30, 1e30, 2.0, -3.0])
+    C = np.zeros((6, n))
+    C[np.arange(6), dofs] = entries
+    g = np.full(6, 1e-4)
+    result = contactqp.solve(contactqp.Problem(K, f, sp.csr_array(C), g), "lagrange")
+    assert result.verified
+    held = np.flatnonzero(np.asarray(result.contact_force) > 0.0)
+    unit = C[held] / np.abs(entries[held])[:, None]  # each row scaled to an entry of ±1
+    saddle = np.block([[K.toarray(), unit.T], [unit, np.zeros((held.size, held.size))]])
+    exact = np.linalg.solve(saddle, np.concatenate((f, g[held] / np.abs(entries[held]))))
+    u, pushes = exact[:n], exact[n:]  # pushes: λ_i |c_i|, the force on the dof
+    assert np.all(pushes >= 0.0)  # the set is the answer's: every held row pushes ...
+    assert np.all(C @ u - g <= 1e-9 * np.abs(g).max())  # ... and no row is passed
+    assert np.abs(np.asarray(result.u) - u).max() <= 1e-9 * np.abs(u).max()
+    found = np.asarray(result.contact_force)[held] * np.abs(entries[held])
+    assert np.abs(found - pushes).max() <= 1e-9 * np.abs(pushes).max()

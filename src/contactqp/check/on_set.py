@@ -33,7 +33,12 @@ REFINE_STEPS = 3  # refinement steps of the reference on its set
 TINY = 1e-14  # a correction below this of F and U is round-off: the refinement stops
 GROWING = 1e-10  # corrections that grow past this of F or U: the reference is not resolved
 STAGNANT = 4.0  # corrections that no longer shrink are noise: the reference is within 4 of them
-NOISE = 10.0  # corrections that grow past this times the round-off floor's are not noise
+NOISE = 10.0  # corrections that grow past this times the round-off floor's are not noise;
+# a first correction under a NOISE-th of it is round-off, and no more are taken (on the 5 106-dof
+# sphere a first correction of 1.9e-14 of F against a floor's 1.1e-11: the two corrections more
+# took a tenth of lagrange's time with its check)
+FLOOR_MOVED = 1e-6  # corrections that move the round-off floor by more than this of itself:
+# the floor is solved again at the answer they moved to
 
 
 def reference(model: ContactModel, lam: np.ndarray, pen: np.ndarray, equality: np.ndarray
@@ -94,18 +99,23 @@ def _refined(model: ContactModel, u: np.ndarray, lam: np.ndarray, rows: np.ndarr
              ) -> tuple[np.ndarray, np.ndarray, float, float] | None:
     """The reference refined on its set (iterative refinement: the residuals r* = K u* − P +
     Cᵀλ* by a product with K, not the factorisation, and C_A u* − g_A, their correction
-    solved with it) and what
-    it may still be off by (force, displacement): the last correction over 1 − ρ, ρ the
-    ratio of the last two (the corrections' geometric tail; STAGNANT times it where they
-    stay level, round-off noise), plus the correction that the
-    round-off of r* itself, ROUND_OFF·(|K||u*| + |P| + |C|ᵀ|λ*|), would make. Measured: on a
-    chain with elements 1e6 apart (a press fit into the stiff one) the first answer left a
-    held row 2.3e-11 m open, 7e-10 of the force; refined, it is exact. None where the corrections grow (the factorisation cannot resolve
-    the answer)."""
+    solved with it) and what it may still be off by (force, displacement): the last
+    correction over 1 − ρ, ρ the ratio of the last two (the corrections' geometric tail;
+    STAGNANT times it where they stay level, round-off noise), plus the correction that the
+    round-off of r* itself, ROUND_OFF·(|K||u*| + |P| + |C|ᵀ|λ*|), would make (solved first: a
+    first correction under a NOISE-th of it is round-off, STAGNANT times it is the tail, and
+    no more are taken). Measured: on a chain with elements 1e6 apart (a press fit into the
+    stiff one) the first answer left a held row 2.3e-11 m open, 7e-10 of the force; refined,
+    it is exact. None where the corrections grow (the factorisation cannot resolve the
+    answer)."""
     sizes: list[tuple[float, float]] = []
+    C_A, gap = model.C[rows], model.g[rows]
+    floor = _floor(model, u, lam)
+    noise = _noise(model, rows, floor)
+    settled = False  # the first correction a NOISE-th of the floor's or less: round-off
     for _ in range(REFINE_STEPS):
         r = model.K @ u - model.P + model.C.T @ lam
-        du, dlam = model.set_solve(rows, r, model.C[rows] @ u - model.g[rows])
+        du, dlam = model.set_solve(rows, r, C_A @ u - gap)
         u, lam = u - du, lam.copy()
         lam[rows] -= dlam
         sizes.append((max(float(np.abs(dlam).max(initial=0.0)), _reaction(model, du)),
@@ -113,14 +123,18 @@ def _refined(model: ContactModel, u: np.ndarray, lam: np.ndarray, rows: np.ndarr
         if sizes[-1][0] <= TINY * model.force_scale and sizes[-1][1] <= (
                 TINY * model.displacement_scale):
             break
-    # what the round-off of r* itself moves: the floor no refinement gets under
-    floor = ROUND_OFF * (magnitude(model.K) @ np.abs(u) + np.abs(model.P)
-                         + magnitude(model.C).T @ np.abs(lam))
-    du, dlam = model.set_solve(rows, floor, np.zeros(rows.size))
-    noise = (max(float(np.abs(dlam).max(initial=0.0)), _reaction(model, du)),
-             float(np.abs(du).max(initial=0.0)))
+        settled = len(sizes) == 1 and sizes[0][0] <= noise[0] / NOISE and sizes[0][1] <= (
+            noise[1] / NOISE)
+        if settled:
+            break
+    if len(sizes) > 1:  # the floor at the answer the corrections moved to, where they moved
+        moved = _floor(model, u, lam)  # it by more than FLOOR_MOVED of itself (one solve
+        if np.any(np.abs(moved - floor) > FLOOR_MOVED * floor):  # more, measured again)
+            noise = _noise(model, rows, moved)
     last = sizes[-1]
-    if len(sizes) > 1:
+    if settled:  # level, as round-off noise is: STAGNANT times it
+        last = (STAGNANT * last[0], STAGNANT * last[1])
+    elif len(sizes) > 1:
         rho = max(last[0] / max(sizes[-2][0], 1e-300), last[1] / max(sizes[-2][1], 1e-300))
         # growing, past both the floor (round-off noise comes and goes under it: measured on
         # a scene with walls on both sides of a node, corrections 6e-11, 1.4e-11, 3.1e-11 m
@@ -134,6 +148,21 @@ def _refined(model: ContactModel, u: np.ndarray, lam: np.ndarray, rows: np.ndarr
         factor = 1.0 / (1.0 - rho) if rho < 0.5 else STAGNANT
         last = (factor * last[0], factor * last[1])
     return u, lam, last[0] + noise[0], last[1] + noise[1]
+
+
+def _floor(model: ContactModel, u: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """ROUND_OFF·(|K||u*| + |P| + |C|ᵀ|λ*|): what the round-off of r* = K u* − P + Cᵀλ* may
+    be, per free dof."""
+    return ROUND_OFF * (magnitude(model.K) @ np.abs(u) + np.abs(model.P)
+                        + magnitude(model.C).T @ np.abs(lam))
+
+
+def _noise(model: ContactModel, rows: np.ndarray, floor: np.ndarray) -> tuple[float, float]:
+    """(force, displacement) that the round-off ``floor`` (:func:`_floor`) moves, solved on
+    the set: the floor no refinement gets under."""
+    du, dlam = model.set_solve(rows, floor, np.zeros(rows.size))
+    return (max(float(np.abs(dlam).max(initial=0.0)), _reaction(model, du)),
+            float(np.abs(du).max(initial=0.0)))
 
 
 def _reaction(model: ContactModel, du: np.ndarray) -> float:

@@ -18,7 +18,10 @@ whose error in λ shrinks per step by 1/(1 + μ), μ the eigenvalues of R^½ W_A
 C_A K⁻¹ C_Aᵀ). With ρ_i = STIFFER × s̄_i (s̄_i = c_iᵀK c_i/(c_iᵀc_i)², at least the stiffness
 the row sees: :attr:`~contactqp.model.base.ContactModel.row_stiffness`) each row's own entry
 of R^½ W_AA R^½ is at least STIFFER, so a few steps reach round-off (3–4 on the Hertz
-cylinder; the steps stop where they no longer shrink by SLOWER below NOISE, round-off noise); the
+cylinder; the steps stop where they no longer shrink by SLOWER below NOISE, round-off noise,
+and the steps that show the noise are taken: they are measured against F, and a row whose
+entries are far from 1 needs them, as a row of 1e30 beside one of 1e-30 on a K of 1e20 did,
+whose answer stopped at the steps' geometric tail was 8.6e41 of F out of balance); the
 residuals are the system's own, so the fixed point is the exact answer, not the penalised one
 (no dense W_AA is formed; each step is one solve with M_A's factor). A correction for the
 refinement of an answer (:func:`contactqp.model.schur.correction`) is one step: its error is
@@ -180,10 +183,13 @@ class AugmentedSet:
         C_A, C_A_T = self.rows_of(model.C)
         u, lam = ((np.zeros(model.n_free), np.zeros(self.rows.size)) if start is None
                   else (start[0].copy(), start[1].copy()))
-        last = np.inf
+        sizes: list[float] = []
         for step in range(steps):
-            r = force - model.K @ u - C_A_T @ lam
-            s = gap - C_A @ u
+            if step == 0 and start is None:  # from u = 0, λ = 0: the residuals are the data
+                r, s = force, gap
+            else:
+                r = force - model.K @ u - C_A_T @ lam
+                s = gap - C_A @ u
             if not holding():  # nothing between the steps solves with K
                 raise SolverError("the augmented factor was replaced during its solve")
             du = inverse(r + C_A_T @ (self.rho * s))
@@ -193,9 +199,9 @@ class AugmentedSet:
             self.steps += 1
             size = max(float(np.abs(du).max(initial=0.0)) / U,
                        float(np.abs(dlam).max(initial=0.0)) / F)
-            if size <= within or (step >= 1 and size > SLOWER * last and size <= NOISE):
+            sizes.append(size)
+            if size <= within or (step >= 1 and SLOWER * sizes[-2] < size <= NOISE):
                 break
-            last = size
         if updated and steps > 1 and size > NOISE:  # the updated factor is too far off to
             # resolve the set (a downdate's cancellation): factored from here on
             model.cache.modified, model.cache.updates_refused = None, True

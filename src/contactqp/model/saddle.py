@@ -13,6 +13,7 @@ said to be redundant (the check then compares Cᵀλ).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -82,7 +83,13 @@ def rows_dependent(C_A: sp.csr_array) -> bool:
 def gram_factor(C_A: sp.csr_array) -> tuple[Any, np.ndarray] | None:
     """(the sparse LU of C_A C_Aᵀ scaled to a unit diagonal, that scale s): (C_A C_Aᵀ)⁻¹b =
     s · LU⁻¹(s · b); None where the rows are dependent (:func:`rows_dependent`)."""
+    diagonal = _disjoint_rows(C_A)
+    if diagonal is not None:  # rows that share no dof: C_A C_Aᵀ is its diagonal
+        scale = 1.0 / np.sqrt(diagonal)
+        return DiagonalFactor(diagonal * scale * scale), scale
     gram = sp.csc_matrix(C_A @ C_A.T)
+    if not np.all(gram.diagonal() > 0.0):  # a row with no entry: dependent on any other
+        return None
     scale = 1.0 / np.sqrt(gram.diagonal())
     gram = sp.csc_matrix(sp.diags_array(scale) @ gram @ sp.diags_array(scale))
     import scipy.sparse.linalg as spla  # at the first solve, not at start-up
@@ -94,6 +101,34 @@ def gram_factor(C_A: sp.csr_array) -> tuple[Any, np.ndarray] | None:
     if np.abs(factor.U.diagonal()).min(initial=1.0) < DEPENDENT:
         return None
     return factor, scale
+
+
+def _disjoint_rows(C_A: sp.csr_array) -> np.ndarray | None:
+    """C_A C_Aᵀ's diagonal where the rows share no dof (C_A C_Aᵀ is then diagonal: a contact
+    row per node and direction, as the Hertz models write them), each entry above 0 and finite;
+    else None. Measured: splu of that diagonal took 0.8 ms a set on the 5 106-dof sphere (54
+    rows held; this, 0.06 ms), twice in lagrange's 60 ms with its check."""
+    C_A = sp.csr_array(C_A)
+    if not C_A.has_canonical_format:
+        return None
+    if np.unique(C_A.indices).size != C_A.indices.size:
+        return None
+    if not C_A.shape[0] or np.diff(C_A.indptr).min() == 0:  # an empty row
+        return None
+    diagonal = np.add.reduceat(C_A.data**2, C_A.indptr[:-1])
+    return diagonal if np.all(diagonal > 0.0) and np.all(np.isfinite(diagonal)) else None
+
+
+@dataclass(frozen=True, eq=False)
+class DiagonalFactor:
+    """The factor of a diagonal matrix: what :func:`gram_factor` gives for rows that share no
+    dof, whose ``solve`` divides by the diagonal as the LU of that matrix would."""
+
+    diagonal: np.ndarray
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        b = np.asarray(b, dtype=float)
+        return b / (self.diagonal if b.ndim == 1 else self.diagonal[:, None])
 
 
 def set_solve(K: sp.sparray, C_A: sp.csr_array, force: np.ndarray, gap: np.ndarray
@@ -122,5 +157,6 @@ def set_solve(K: sp.sparray, C_A: sp.csr_array, force: np.ndarray, gap: np.ndarr
     return x[:n], x[n:] * scale, True
 
 
-__all__ = ["DEPENDENT", "REDUNDANT_SHIFT", "banded_order", "gram_factor", "row_scale",
-           "rows_dependent", "saddle_point_system", "set_solve", "solve_saddle_point"]
+__all__ = ["DEPENDENT", "REDUNDANT_SHIFT", "DiagonalFactor", "banded_order", "gram_factor",
+           "row_scale", "rows_dependent", "saddle_point_system", "set_solve",
+           "solve_saddle_point"]
