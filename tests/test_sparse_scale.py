@@ -470,23 +470,21 @@ def test_rows_on_dofs_of_their_own_solve_their_gram_matrix_as_lapack_does(seed):
     C = np.zeros((m, n))
     for i, own in enumerate(np.array_split(dofs[: 2 * m], m)):  # 2 dofs of its own each
         C[i, own] = rng.choice([-1.0, 1.0], own.size) * 10.0 ** rng.uniform(-100, 100, own.size)
-    b = rng.standard_normal(m)
-    for rows, diagonal in ((C, True), (np.vstack((C, C[0] + C[1])), False)):
-        gram = rows @ rows.T
-        found = gram_factor(sp.csr_array(rows))
-        if not diagonal:  # a row that repeats two others: dependent
-            assert found is None
-            shared = rows.copy()
-            shared[-1] = 0.0
-            shared[-1, [dofs[0], dofs[-1]]] = 1.0  # a dof of row 0's and one of its own
-            gram = shared @ shared.T
-            found = gram_factor(sp.csr_array(shared))
-        factor, scale = found
+
+    def solved_as_lapack_does(rows: np.ndarray, diagonal: bool) -> None:
+        factor, scale = gram_factor(sp.csr_array(rows))
         assert isinstance(factor, DiagonalFactor) == diagonal
-        rhs = rng.standard_normal(gram.shape[0]) if not diagonal else b
+        rhs = rng.standard_normal(rows.shape[0])
         x = scale * factor.solve(scale * rhs)
-        exact = np.linalg.solve(gram, rhs)
+        exact = np.linalg.solve(rows @ rows.T, rhs)
         assert np.all(np.abs(x - exact) <= 1e-13 * np.abs(exact) + 1e-300)
+
+    solved_as_lapack_does(C, diagonal=True)
+    # a row that repeats two others: dependent
+    assert gram_factor(sp.csr_array(np.vstack((C, C[0] + C[1])))) is None
+    shared = np.zeros((1, n))
+    shared[0, [dofs[0], dofs[-1]]] = 1.0  # a dof of row 0's and one of its own
+    solved_as_lapack_does(np.vstack((C, shared)), diagonal=False)
     empty = C.copy()
     empty[3] = 0.0
     with warnings.catch_warnings():

@@ -183,7 +183,7 @@ class AugmentedSet:
         C_A, C_A_T = self.rows_of(model.C)
         u, lam = ((np.zeros(model.n_free), np.zeros(self.rows.size)) if start is None
                   else (start[0].copy(), start[1].copy()))
-        sizes: list[float] = []
+        last = np.inf
         for step in range(steps):
             if step == 0 and start is None:  # from u = 0, λ = 0: the residuals are the data
                 r, s = force, gap
@@ -199,9 +199,9 @@ class AugmentedSet:
             self.steps += 1
             size = max(float(np.abs(du).max(initial=0.0)) / U,
                        float(np.abs(dlam).max(initial=0.0)) / F)
-            sizes.append(size)
-            if size <= within or (step >= 1 and SLOWER * sizes[-2] < size <= NOISE):
+            if size <= within or (step >= 1 and SLOWER * last < size <= NOISE):
                 break
+            last = size
         if updated and steps > 1 and size > NOISE:  # the updated factor is too far off to
             # resolve the set (a downdate's cancellation): factored from here on
             model.cache.modified, model.cache.updates_refused = None, True
