@@ -397,3 +397,52 @@ def test_the_force_residuals_are_their_definitions_row_by_row(seed, equalities):
         assert found["complementarity"] == pytest.approx(max(both + [0.0]) / F, rel=1e-12,
                                                          abs=1e-300)
         assert found["sign"] == pytest.approx(max(pulls + [0.0]) / F, rel=1e-12, abs=1e-300)
+
+
+def test_a_row_an_exact_answer_leaves_touching_with_no_force_costs_the_check_no_set():
+    """Springs in parallel, K = diag(k), one row u_i <= g_i per dof (C = I), in numbers exact
+    in binary: the free displacement f/k is 0.5 at dofs 0 and 1, on their gaps (touching, no
+    force), past the gaps of dofs 2, 4 and 5 (forces f − k g = 0.5, 2, 2) and short of dof 3's.
+    lagrange's answer is that exact answer, and its check solves one set, the pushing rows:
+    the touching rows with exactly no force start outside it (on the rows mesh, one such row
+    cost the check a set of its own, 0.52 s of 3.3 s). An answer that gives a row that must
+    push exactly no force, on its gap, has that row enter the check's set and its force
+    counted."""
+    import scipy.sparse as sp
+
+    from contactqp.model.sparse import problem_model
+
+    k = np.array([2.0, 2.0, 2.0, 4.0, 4.0, 4.0])
+    f = np.array([1.0, 1.0, 1.0, 4.0, 4.0, 4.0])
+    g = np.array([0.5, 0.5, 0.25, 2.0, 0.5, 0.5])
+    exact_u = np.minimum(f / k, g)
+    exact_force = f - k * exact_u
+    assert exact_u.tolist() == [0.5, 0.5, 0.25, 1.0, 0.5, 0.5]
+    assert exact_force.tolist() == [0.0, 0.0, 0.5, 0.0, 2.0, 2.0]
+    problem = contactqp.Problem(sp.diags_array(k).tocsr(), f, sp.eye_array(6, format="csr"), g)
+    result = contactqp.solve(problem, method="lagrange")
+    np.testing.assert_allclose(result.u, exact_u, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(result.contact_force, exact_force, rtol=0, atol=1e-15)
+    assert result.contact_force[:2].tolist() == [0.0, 0.0]
+
+    model = problem_model(problem)
+    held = []
+    solve_on = type(model).on_set
+
+    def counted(self, active):
+        held.append(np.flatnonzero(active).tolist())
+        return solve_on(self, active)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(type(model), "on_set", counted)
+        found = contactqp.check(model, result.u, result.contact_force)
+        assert found.verified
+        assert held == [[2, 4, 5]]
+
+        held.clear()
+        forged = exact_force.copy()
+        forged[2] = 0.0  # row 2 on its gap with no force: dof 2 out of balance by 0.5
+        found = contactqp.check(model, exact_u, forged)
+        assert not found.verified
+        assert found.force_error_bound >= 0.5
+        assert held[0] == [4, 5] and 2 in held[-1]
