@@ -446,3 +446,22 @@ def test_a_row_an_exact_answer_leaves_touching_with_no_force_costs_the_check_no_
         assert not found.verified
         assert found.force_error_bound >= 0.5
         assert held[0] == [4, 5] and 2 in held[-1]
+
+
+@pytest.mark.parametrize("front", ["scene", "problem"])
+def test_an_answer_out_of_balance_has_a_bound_that_covers_its_error(front):
+    """The flat patch's exact answer (every node on its wall) with the largest contact force
+    set to 0: u is exact, so the answer is off by that force alone, on that row. It is out of
+    balance there and not verified, and its force bound must still cover the error. The
+    chain's certificate holds to first order within the answer's own set of pushing rows,
+    which this answer leaves: it said 51 316 N for an error of 1e5 N, and it was the bound
+    given."""
+    scene = builders.flat_patch(20)
+    exact = reference(scene)
+    lam = exact.contact_force.copy()
+    row = int(np.argmax(lam))
+    lam[row] = 0.0
+    target = scene if front == "scene" else contactqp.problem_from_scene(scene)
+    found = contactqp.check(target, exact.displacement, lam)
+    assert not found.verified
+    assert found.force_error_bound >= exact.contact_force[row] * (1 - 1e-9)
