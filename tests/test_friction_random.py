@@ -594,6 +594,9 @@ def test_no_tresca_answer_of_a_backend_is_past_its_bound(method, options, seed, 
                          ids=[route_id(*route) for route in SLOW_ROUTES])
 @settings(max_examples=4, deadline=None)
 @given(**TRESCA_EXAMPLES, dual=st.booleans())
+# no frictional row: cvxpy 1.7.5, the lowest pyproject.toml admits, refused the Tresca
+# problem's t of size 0 with a ValueError (found on fresh seeds against .ci/minimum.txt)
+@example(seed=31153, d=1, start="rest or drawn", dual=False)
 def test_no_tresca_answer_of_a_slow_backend_is_past_its_bound(method, options, seed, d, start,
                                                                dual):
     """As above for cvxpy (its problem is compiled on every solve) and SCS (first order, run

@@ -273,18 +273,20 @@ def solve_cvxpy(model: FrictionModel, law: Law, origin: np.ndarray, settings: di
     J = np.flatnonzero(law.frictional)
     d = model.d
     u = cp.Variable(model.K.shape[0])
-    t = cp.Variable(J.size)
     energy = 0.5 * cp.quad_form(u, cp.psd_wrap(sp.csc_matrix(model.K))) - model.load @ u
     constraints = []
     if model.C is not None:
         constraints.append(sp.csr_matrix(model.C) @ u <= model.gap)
-    rows = d * J[:, None] + np.arange(d)
-    slips = [sp.csr_matrix(model.T[rows[:, a]]) @ u - origin[rows[:, a]] for a in range(d)]
-    if d == 1:
-        constraints += [slips[0] <= t, -slips[0] <= t]
-    else:
-        constraints.append(cp.SOC(t, cp.vstack(slips), axis=0))
-    problem = cp.Problem(cp.Minimize(energy + law.values[J] @ t), constraints)
+    if J.size:  # no frictional row: no t (cvxpy 1.7 refuses a variable of size 0)
+        t = cp.Variable(J.size)
+        rows = d * J[:, None] + np.arange(d)
+        slips = [sp.csr_matrix(model.T[rows[:, a]]) @ u - origin[rows[:, a]] for a in range(d)]
+        if d == 1:
+            constraints += [slips[0] <= t, -slips[0] <= t]
+        else:
+            constraints.append(cp.SOC(t, cp.vstack(slips), axis=0))
+        energy = energy + law.values[J] @ t
+    problem = cp.Problem(cp.Minimize(energy), constraints)
     start = time.perf_counter()
     try:
         with silenced():
@@ -296,9 +298,9 @@ def solve_cvxpy(model: FrictionModel, law: Law, origin: np.ndarray, settings: di
         raise SolverError(f"cvxpy: found no solution of the Tresca problem ({problem.status})")
     offset = 1 if model.C is not None else 0
     lam_T = np.zeros((model.contacts, d))
-    if d == 1:
+    if J.size and d == 1:
         lam_T[J, 0] = constraints[offset].dual_value - constraints[offset + 1].dual_value
-    else:
+    elif J.size:
         # cvxpy's SOC dual (z₀, z) with ‖z‖ ≤ z₀: the friction force is −z
         lam_T[J] = -np.asarray(constraints[offset].dual_value[1]).reshape(d, J.size).T
     normal = None if model.C is None else np.asarray(constraints[0].dual_value)
