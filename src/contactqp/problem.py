@@ -57,6 +57,7 @@ KINDS = ("inequality", "equality")
 SYMMETRY_RTOL = 1e-10  # |K_ij − K_ji| may be this much of √(K_ii K_jj) (round-off)
 MINOR_RTOL = 1e-10  # K_ij² may exceed K_ii K_jj by this fraction (round-off of a rigid link)
 MAX_DOFS = 10**8  # beyond this many unknowns (or rows) no factorisation fits in memory
+KEPT_MODELS = ("_sparse_model", "_friction_")  # where a Problem keeps its models (names begin so)
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,13 +191,11 @@ class Problem:
         ProblemError
             A value that is not valid, or gaps that leave no u (one line naming them).
         """
-        problem = copy.copy(self)
-        for key in [k for k in problem.__dict__ if k.startswith("_sparse_model")]:
-            problem.__dict__.pop(key)  # the model of these values is its own, every engine's
+        problem = detached(self)  # the model of these values is its own, every engine's
         # a friction model shares its factorisation with the next values' (K, C, T are kept)
-        kept = problem.__dict__.pop("_friction_model", None)
-        if kept is not None:
-            problem.__dict__["_friction_parent"] = kept
+        parent = self.__dict__.get("_friction_model", self.__dict__.get("_friction_parent"))
+        if parent is not None:
+            problem.__dict__["_friction_parent"] = parent
         changes = {"f": None if f is None else _validate.vector("f", f, self.n),
                    "g": None if g is None else _validate.vector("g", g, self.m),
                    "prescribed_values": None if prescribed_values is None else _validate.vector(
@@ -209,6 +208,17 @@ class Problem:
             if conflict:
                 raise ProblemError(conflict)
         return problem
+
+
+def detached(problem: Problem) -> Problem:
+    """``problem`` without the models it keeps (every engine's, friction's): a copy that shares
+    its arrays, which are read-only. A model holds its problem's detached copy, so that the two
+    do not hold each other: that cycle kept each solve's factorisations (420 MB at 3.3·10⁵
+    dofs) until Python's cyclic collector ran."""
+    problem = copy.copy(problem)
+    for key in [k for k in problem.__dict__ if k.startswith(KEPT_MODELS)]:
+        del problem.__dict__[key]
+    return problem
 
 
 def _called(init: Any) -> Any:
@@ -404,6 +414,6 @@ FRICTION_SOLVE = ("solve it with contactqp.solve (methods lagrange, qp, cone, re
                   "semismooth_newton, penalty, augmented), whose Result checks it")
 
 
-__all__ = ["FRICTION_LAWS", "KINDS", "MAX_DOFS", "SYMMETRY_RTOL", "Problem", "friction_fields",
-           "frictionless",
+__all__ = ["FRICTION_LAWS", "KINDS", "MAX_DOFS", "SYMMETRY_RTOL", "Problem", "detached",
+           "friction_fields", "frictionless",
            "symmetric_part", "validated"]

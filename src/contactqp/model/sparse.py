@@ -28,6 +28,7 @@ saddle-point system.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Any
@@ -67,7 +68,7 @@ from contactqp.model.singular import (
     loads_held,
     plain_factor,
 )
-from contactqp.problem import Problem
+from contactqp.problem import Problem, detached
 
 EINSUM_WORK = 10**8  # multiply-adds up to which W is formed by einsum rather than BLAS
 SOLVE_BLOCK = 2**25  # entries of a block of solved columns K⁻¹C_rowsᵀ (256 MB)
@@ -79,7 +80,8 @@ class SparseModel(ContactModel):
 
     Attributes
     ----------
-    problem : the user's Problem.
+    source : the problem's arrays: its detached copy (:func:`contactqp.problem.detached`), so
+        that a Problem that keeps its model and the model do not hold each other.
     free : the free dofs (indices into the problem's u).
     K, P, C, g : K_II, f_I − K_ID u_D, C_I and g: the problem in the free dofs.
     factor : K's factorisation, CHOLMOD's (:class:`~contactqp.model.factor.CholmodK`) or
@@ -88,7 +90,7 @@ class SparseModel(ContactModel):
     floating : the modes K leaves free, which contact rows hold (free dofs x modes, or None).
     """
 
-    problem: Problem
+    source: Problem
     free: np.ndarray
     K: sp.csc_matrix
     P: np.ndarray
@@ -97,6 +99,19 @@ class SparseModel(ContactModel):
     factor: spla.SuperLU | CholmodK | AmgK | None
     floating: np.ndarray | None = None
     cache: ColumnCache = field(default_factory=ColumnCache)
+    origin: weakref.ref | None = None  # the user's Problem, held weakly
+
+    @classmethod
+    def of(cls, problem: Problem, *parts: Any) -> SparseModel:
+        """The model of ``problem`` from its parts (the fields after ``source``)."""
+        return cls(detached(problem), *parts, origin=weakref.ref(problem))
+
+    @property
+    def problem(self) -> Problem:
+        """The user's Problem solved: the object itself while anything holds it, else its
+        detached copy (the same arrays)."""
+        problem = None if self.origin is None else self.origin()
+        return self.source if problem is None else problem
 
     @property
     def n_free(self) -> int:
@@ -187,8 +202,8 @@ class SparseModel(ContactModel):
         (:meth:`contactqp.Problem.with_values`): K's factorisation, its free modes and the
         columns of W shared; P and g anew."""
         P, g = _loads_and_gaps(problem, self.free)
-        model = SparseModel(problem, self.free, self.K, P, self.C, g, self.factor, self.floating,
-                            self.cache)
+        model = SparseModel.of(problem, self.free, self.K, P, self.C, g, self.factor,
+                               self.floating, self.cache)
         loads_held(model)
         # what K and C alone decide, where this model has worked it out already; never P or g
         for name in ("row_stiffness", "row_roots", "_entries", "_one_entry_per_row",
@@ -455,10 +470,10 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING, engine: str =
     if engine == "amg" and free.size:
         modes = iterative.rigid_body_modes(problem.coordinates, problem.K)
         factor = AmgK.of(K_II, None if modes is None else modes[free])
-        return SparseModel(problem, free, K_II, P, C, g, factor, None, ColumnCache())
+        return SparseModel.of(problem, free, K_II, P, C, g, factor, None, ColumnCache())
     factor = cholmod_of(K_II, C) if ordering == ORDERING else None
     if factor is not None:  # K positive definite, its pivots far from 0
-        return SparseModel(problem, free, K_II, P, C, g, factor, None, ColumnCache())
+        return SparseModel.of(problem, free, K_II, P, C, g, factor, None, ColumnCache())
     factor, cache, candidates = factor_or_none(K_II, ordering)
     floating = None
     if factor is None:
@@ -467,7 +482,7 @@ def build_sparse_model(problem: Problem, ordering: str = ORDERING, engine: str =
             factor, cache = plain_factor(K_II, ordering)
         else:
             held_by_contact(problem, free, C, floating)
-    model = SparseModel(problem, free, K_II, P, C, g, factor, floating, cache)
+    model = SparseModel.of(problem, free, K_II, P, C, g, factor, floating, cache)
     loads_held(model)
     return model
 

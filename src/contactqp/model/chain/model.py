@@ -115,14 +115,17 @@ class Model(ContactModel):
         """The bars with no support (:attr:`Layout.floating_bars`)."""
         return tuple(self.layout.floating_bars.tolist())
 
-    @cached_property
+    @property
     def held(self) -> Model:
         """This model, or where bars have no support (:attr:`floating`) the model with each
         such bar tied to zero at its node 0 by a spring as stiff as the whole bar (its
         elements in series), so that K is positive definite. For scales only (U, the
         stiffness the walls see, a solver's scaling): never for an answer."""
-        if not self.floating:
-            return self
+        return self._tied if self.floating else self  # never kept as itself: no cycle
+
+    @cached_property
+    def _tied(self) -> Model:
+        """:attr:`held` where bars float (made once)."""
         band = self.band.copy()
         layout = self.layout
         column = np.searchsorted(self.free, layout.node_offsets[list(self.floating)])
@@ -472,20 +475,21 @@ def scene_model(scene: Scene) -> Model:
     change, so every later solve, preparation or load path of the same scene object reuses
     the model and what it has worked out since (K's solves and factor, K⁻¹P, the scales F
     and U, the free gaps; :class:`Model`'s cached properties), and computes none of it
-    twice. Its arrays are read-only, so that no caller can change what the next one reads.
+    twice. The model is kept in the scene (:data:`contactqp.scene.scene.KEPT`), not in its
+    layout, which the model holds: no cycle keeps either past its last user. Its arrays are read-only, so that no caller can change what the next one reads.
     A scene with other values (:meth:`Scene.with_values`) has a layout of its own, and so a
     model of its own."""
-    layout = layout_of(scene)
-    model = layout.__dict__.get(_KEPT_MODEL)
+    model = scene.__dict__.get(_KEPT_MODEL)
     if model is None:
-        model = build_model(layout)
+        model = build_model(layout_of(scene))
         for array in (model.free, model.band, model.P):
             array.flags.writeable = False
-        layout.__dict__[_KEPT_MODEL] = model
+        scene.__dict__[_KEPT_MODEL] = model
     return model
 
 
-_KEPT_MODEL = "_scene_model"  # where scene_model keeps a layout's model
+# where scene_model keeps a scene's model: in the scene, not its layout, which the model holds
+_KEPT_MODEL = "_scene_model"
 
 
 def free_loads(layout: Layout) -> np.ndarray:

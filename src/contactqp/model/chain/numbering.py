@@ -14,7 +14,7 @@ the force scales, bar grouping) is :mod:`contactqp.model.chain.derived`'s.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import weakref
 from functools import cached_property
 from typing import NamedTuple
 
@@ -26,7 +26,7 @@ from contactqp.model.chain.derived import (
     _read_only,
 )
 from contactqp.scene import Scene  # the numbering reads a scene; a scene knows none
-from contactqp.scene.scene import NUMBERING
+from contactqp.scene.scene import NUMBERING, detached
 
 
 class ContactRows(NamedTuple):
@@ -72,7 +72,6 @@ def _wall_columns(walls) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
             np.where(plus, 1.0, -1.0), np.fromiter((w.gap for w in walls), float, n))
 
 
-@dataclass(frozen=True, eq=False)
 class Layout(SolvingArrays):
     """The numbering of a scene's nodes and the arrays along it (module docstring).
 
@@ -82,13 +81,37 @@ class Layout(SolvingArrays):
         The scene to number.
     """
 
-    scene: Scene
+    def __init__(self, scene: Scene) -> None:
+        self.__dict__["_source"] = scene
+        self.__dict__["_origin"] = None
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError(f"a Layout does not change: cannot assign {name!r}")
+
+    def __repr__(self) -> str:
+        return f"Layout({self.scene!r})"
+
+    @classmethod
+    def kept_by(cls, scene: Scene) -> Layout:
+        """The layout ``scene`` keeps (:func:`layout_of`): it holds the scene weakly, and the
+        scene's detached copy (:func:`contactqp.scene.scene.detached`) for when the scene is
+        gone, so that the two do not hold each other."""
+        layout = cls(detached(scene))
+        layout.__dict__["_origin"] = weakref.ref(scene)
+        return layout
+
+    @property
+    def scene(self) -> Scene:
+        """The scene numbered: the object itself while anything holds it, else its detached
+        copy (the same parts)."""
+        scene = None if self._origin is None else self._origin()
+        return self._source if scene is None else scene
 
     def with_values(self, scene: Scene) -> Layout:
         """The layout of ``scene``, which differs from this one's only in its load values and
         gaps (:meth:`Scene.with_values`): every array that does not depend on them
         (:data:`TOPOLOGY`, and the contact rows but their gaps) is shared, not made again."""
-        layout = Layout(scene)
+        layout = Layout.kept_by(scene)
         for name in TOPOLOGY:
             if name in self.__dict__:
                 layout.__dict__[name] = self.__dict__[name]
@@ -382,7 +405,7 @@ def layout_of(scene: Scene) -> Layout:
     :meth:`Scene.with_values` hands a scene with other values the numbering it shares)."""
     layout = scene.__dict__.get("layout")
     if layout is None:
-        layout = scene.__dict__["layout"] = Layout(scene)
+        layout = scene.__dict__["layout"] = Layout.kept_by(scene)
     return layout
 
 
