@@ -11,6 +11,7 @@ what such a cycle keeps. The expected answers need no number: an object is gone 
 from __future__ import annotations
 
 import gc
+import pickle
 import weakref
 
 import numpy as np
@@ -109,3 +110,17 @@ def test_values_prepared_and_batched_go_with_their_last_reference(no_cyclic_coll
                                             shifted.model, prepared, cases[1].model)]
     del problem, other, again, scene, moved, shifted, prepared, cases
     assert [ref() for ref in seen] == [None] * len(seen)
+
+
+def test_a_scene_its_result_and_layout_pickle_as_before():
+    """A weak reference does not pickle: a layout pickles as one of its scene's detached copy,
+    and a pickled Result of a scene reads the same as the one it was made from."""
+    scene = flat_patch(12)
+    result = contactqp.solve(scene, "lagrange")
+    again = pickle.loads(pickle.dumps(result))
+    for name in ("u", "contact_force", "reactions", "element_force"):
+        assert np.array_equal(getattr(again, name), getattr(result, name)), name
+    assert again.verified == result.verified and again.summary() == result.summary()
+    assert again.layout.n_nodes == result.layout.n_nodes
+    scene_again = pickle.loads(pickle.dumps(scene))  # it keeps its layout and model
+    assert np.array_equal(contactqp.solve(scene_again, "lagrange").u, result.u)

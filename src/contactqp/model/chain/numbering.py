@@ -91,6 +91,11 @@ class Layout(SolvingArrays):
     def __repr__(self) -> str:
         return f"Layout({self.scene!r})"
 
+    def __reduce__(self) -> tuple:
+        """Pickled as a layout of its scene's detached copy (a weak reference is not pickled;
+        the arrays are made again where read)."""
+        return (Layout, (self._source,))
+
     @classmethod
     def kept_by(cls, scene: Scene) -> Layout:
         """The layout ``scene`` keeps (:func:`layout_of`): it holds the scene weakly, and the
