@@ -122,5 +122,16 @@ def test_a_scene_its_result_and_layout_pickle_as_before():
         assert np.array_equal(getattr(again, name), getattr(result, name)), name
     assert again.verified == result.verified and again.summary() == result.summary()
     assert again.layout.n_nodes == result.layout.n_nodes
-    scene_again = pickle.loads(pickle.dumps(scene))  # it keeps its layout and model
+    scene_again = pickle.loads(pickle.dumps(scene))  # without the layout and model it keeps
+    assert not {"layout", "_scene_model"} & set(scene_again.__dict__)
     assert np.array_equal(contactqp.solve(scene_again, "lagrange").u, result.u)
+
+
+def test_a_solved_problem_pickles_without_its_factorisation():
+    """A Problem keeps its model, whose CHOLMOD factor does not pickle: the Problem pickles
+    without it (it raised a TypeError before), and the copy solves to the same answer."""
+    problem = _problem()
+    first = contactqp.solve(problem, "lagrange")
+    again = pickle.loads(pickle.dumps(problem))
+    assert not any(key.startswith("_sparse_model") for key in again.__dict__)
+    assert np.array_equal(contactqp.solve(again, "lagrange").u, first.u)

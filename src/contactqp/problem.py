@@ -163,6 +163,11 @@ class Problem:
         return _validate.frozen(np.array([kind == "equality" for kind in self.kinds],
                                          dtype=bool))
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without the models it keeps (K's factorisation is not pickled; the next
+        solve builds it again)."""
+        return {k: v for k, v in self.__dict__.items() if not k.startswith(KEPT_MODELS)}
+
     def __repr__(self) -> str:
         friction = (f", {self.friction} friction on {self.contacts} contacts ({self.d + 1}D)"
                     if self.T is not None else "")

@@ -123,6 +123,11 @@ class Scene:
         if conflict:
             raise SceneError(conflict)
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without what the chain model keeps in it (:data:`KEPT`: made again where
+        read)."""
+        return {k: v for k, v in self.__dict__.items() if k not in KEPT}
+
     @property
     def layout(self) -> Any:
         """The numbering of the scene's nodes and the arrays along it
