@@ -220,10 +220,7 @@ def detached(problem: Problem) -> Problem:
     its arrays, which are read-only. A model holds its problem's detached copy, so that the two
     do not hold each other: that cycle kept each solve's factorisations (420 MB at 3.3·10⁵
     dofs) until Python's cyclic collector ran."""
-    problem = copy.copy(problem)
-    for key in [k for k in problem.__dict__ if k.startswith(KEPT_MODELS)]:
-        del problem.__dict__[key]
-    return problem
+    return copy.copy(problem)  # which leaves them out, as pickle does (Problem.__getstate__)
 
 
 def _called(init: Any) -> Any:

@@ -392,10 +392,7 @@ def detached(scene: Scene) -> Scene:
     its parts, which do not change. A scene's numbering holds its scene's detached copy, so
     that the two do not hold each other: that cycle kept each solve's model (42 MB for 10⁵
     elements) until Python's cyclic collector ran."""
-    scene = copy.copy(scene)
-    for key in KEPT:
-        scene.__dict__.pop(key, None)
-    return scene
+    return copy.copy(scene)  # which leaves it out, as pickle does (Scene.__getstate__)
 
 
 def _items(values: Any, kind: type, name: str) -> tuple:

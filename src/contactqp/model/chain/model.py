@@ -476,7 +476,8 @@ def scene_model(scene: Scene) -> Model:
     the model and what it has worked out since (K's solves and factor, K⁻¹P, the scales F
     and U, the free gaps; :class:`Model`'s cached properties), and computes none of it
     twice. The model is kept in the scene (:data:`contactqp.scene.scene.KEPT`), not in its
-    layout, which the model holds: no cycle keeps either past its last user. Its arrays are read-only, so that no caller can change what the next one reads.
+    layout, which the model holds: no cycle keeps either past its last user. Its arrays are
+    read-only, so that no caller can change what the next one reads.
     A scene with other values (:meth:`Scene.with_values`) has a layout of its own, and so a
     model of its own."""
     model = scene.__dict__.get(_KEPT_MODEL)
