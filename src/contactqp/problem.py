@@ -57,7 +57,8 @@ KINDS = ("inequality", "equality")
 SYMMETRY_RTOL = 1e-10  # |K_ij − K_ji| may be this much of √(K_ii K_jj) (round-off)
 MINOR_RTOL = 1e-10  # K_ij² may exceed K_ii K_jj by this fraction (round-off of a rigid link)
 MAX_DOFS = 10**8  # beyond this many unknowns (or rows) no factorisation fits in memory
-KEPT_MODELS = ("_sparse_model", "_friction_")  # where a Problem keeps its models (names begin so)
+SPARSE_MODEL = "_sparse_model"  # where contactqp.model.sparse keeps a Problem's model (per engine)
+KEPT_MODELS = (SPARSE_MODEL, "_friction_")  # where a Problem keeps its models (names begin so)
 
 
 @dataclass(frozen=True, eq=False)
@@ -416,6 +417,5 @@ FRICTION_SOLVE = ("solve it with contactqp.solve (methods lagrange, qp, cone, re
                   "semismooth_newton, penalty, augmented), whose Result checks it")
 
 
-__all__ = ["FRICTION_LAWS", "KINDS", "MAX_DOFS", "SYMMETRY_RTOL", "Problem", "detached",
-           "friction_fields", "frictionless",
-           "symmetric_part", "validated"]
+__all__ = ["FRICTION_LAWS", "KINDS", "MAX_DOFS", "SPARSE_MODEL", "SYMMETRY_RTOL", "Problem",
+           "detached", "friction_fields", "frictionless", "symmetric_part", "validated"]

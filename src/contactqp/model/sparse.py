@@ -68,7 +68,7 @@ from contactqp.model.singular import (
     loads_held,
     plain_factor,
 )
-from contactqp.problem import Problem, detached
+from contactqp.problem import SPARSE_MODEL, Problem, detached
 
 EINSUM_WORK = 10**8  # multiply-adds up to which W is formed by einsum rather than BLAS
 SOLVE_BLOCK = 2**25  # entries of a block of solved columns K⁻¹C_rowsᵀ (256 MB)
@@ -424,7 +424,7 @@ def problem_model(problem: Problem, engine: str = "direct") -> SparseModel:
     return model
 
 
-_KEPT_MODEL = "_sparse_model"  # where problem_model keeps a problem's model
+_KEPT_MODEL = SPARSE_MODEL  # where problem_model keeps a problem's model
 ENGINES = ("direct", "amg")  # how a user's model solves with K (problem_model)
 
 

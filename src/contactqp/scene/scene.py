@@ -44,7 +44,8 @@ from contactqp.units import UNIT_SYSTEMS, Units
 NUMBERING: list[Callable[[Any], Any]] = []
 # What the chain model keeps in a scene (its numbering, its model), which a scene made from it
 # with other values, or a scene's detached copy, leaves out
-KEPT = ("layout", "_scene_model")
+SCENE_MODEL = "_scene_model"  # where contactqp.model.chain.scene_model keeps a scene's model
+KEPT = ("layout", SCENE_MODEL)
 
 
 @dataclass(frozen=True, eq=False)

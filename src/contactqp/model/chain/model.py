@@ -35,6 +35,7 @@ from contactqp.model.chain.layout_names import (
 )
 from contactqp.model.chain.numbering import layout_of
 from contactqp.scene import Scene, row_names
+from contactqp.scene.scene import SCENE_MODEL
 
 
 @dataclass(frozen=True, eq=False)
@@ -490,7 +491,7 @@ def scene_model(scene: Scene) -> Model:
 
 
 # where scene_model keeps a scene's model: in the scene, not its layout, which the model holds
-_KEPT_MODEL = "_scene_model"
+_KEPT_MODEL = SCENE_MODEL
 
 
 def free_loads(layout: Layout) -> np.ndarray:
