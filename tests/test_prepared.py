@@ -216,3 +216,20 @@ def test_gaps_that_leave_a_node_no_position_are_refused():
 def test_options_are_checked_once_when_prepared():
     with pytest.raises(contactqp.OptionError, match="penalty"):
         contactqp.prepare(method="penalty", penalty=-1.0)
+
+
+@pytest.mark.parametrize(("gaps", "named"), [
+    (np.array([1e-4 + 1e-5j]), "got complex values (dtype complex128)"),
+    (np.array([None], dtype=object), "got None at gaps[0]"),
+    (np.array([True]), "got True at gaps[0]"),
+    (np.array(["near"]), "got 'near' at gaps[0]"),
+])
+def test_an_array_of_values_that_are_not_numbers_is_one_line_naming_the_entry(gaps, named):
+    """An array's repr spans lines and holds every entry: the refusal names the first entry
+    that is not a number (or the complex dtype) in one line, on a scene and a prepared one."""
+    for call in (lambda: contactqp.default_scene().with_values(gaps=gaps),
+                 lambda: contactqp.prepare().solve(gaps=gaps)):
+        with pytest.raises(contactqp.ContactqpError) as refused:
+            call()
+        assert "\n" not in str(refused.value) and str(refused.value).startswith(
+            "gaps must be numbers (") and str(refused.value).endswith(named)

@@ -149,6 +149,18 @@ def positive_numbers(name: str, values: Any, limit: int) -> np.ndarray:
     return array
 
 
+def _not_a_number(name: str, raw: np.ndarray) -> str:
+    """What of ``raw`` (an array whose dtype is not a number's) is not a number, in one line:
+    its first entry that is not, with where it is, or its dtype (an array's repr spans lines
+    and holds every entry)."""
+    if raw.dtype.kind == "c":
+        return f"complex values (dtype {raw.dtype})"
+    for index in np.ndindex(raw.shape):
+        if not is_number(raw[index]):
+            return f"{shown(raw[index])} at {name}[{', '.join(map(str, index))}]"
+    return f"an array of dtype {raw.dtype}"
+
+
 def value_array(name: str, values: Any, shape: tuple[int, ...], what: str,
                 error: type[ContactqpError]) -> np.ndarray:
     """``values`` as a float array of ``shape`` (a leading -1: any number of cases), every
@@ -159,7 +171,7 @@ def value_array(name: str, values: Any, shape: tuple[int, ...], what: str,
     except (TypeError, ValueError):
         raise error(f"{name} must be numbers ({what}), got {values!r}") from None
     if raw.dtype.kind not in "iuf":  # text, booleans, objects: not numbers, as in a Scene
-        raise error(f"{name} must be numbers ({what}), got {values!r}")
+        raise error(f"{name} must be numbers ({what}), got {_not_a_number(name, raw)}")
     array = raw.astype(float)
     expected = tuple(array.shape[0] if n == -1 and array.ndim else n for n in shape)
     if array.shape != expected:
