@@ -211,7 +211,7 @@ def brute_force(scene: Scene, contact: str = "inequality"):
     return best[1], best[2], best[3]
 
 
-def _rational_solve(A: list[list[Fraction]], b: list[Fraction]) -> list[Fraction] | None:
+def rational_solve(A: list[list[Fraction]], b: list[Fraction]) -> list[Fraction] | None:
     """x with A x = b by Gauss–Jordan in exact arithmetic; None where A is singular."""
     n = len(b)
     rows = [list(A[i]) + [b[i]] for i in range(n)]
@@ -254,7 +254,7 @@ def exact_problem_answer(K, f, C, g, prescribed=(), values=(), equality=()):
             A = [[K[i][j] for j in free] + [C[r][i] for r in active] for i in free]
             A += [[C[r][j] for j in free] + [Fraction(0)] * k for r in active]
             b = rhs_free + [g[r] - sum(C[r][d] * v for d, v in held.items()) for r in active]
-            x = _rational_solve(A, b)
+            x = rational_solve(A, b)
             if x is None:
                 continue
             u = [Fraction(0)] * n
