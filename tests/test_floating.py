@@ -317,3 +317,17 @@ def test_floating_bars_held_through_repeated_rows_by_lagrange():
         assert np.abs(found.u - exact.displacement).max() <= found.displacement_error_bound
         assert found.element_force is not None
         assert found.element_force.size == sum(bar.n_nodes - 1 for bar in scene.bars)
+
+
+def test_a_zero_pivot_that_no_free_mode_explains_is_refused_in_one_line(monkeypatch):
+    """A K that SuperLU finds exactly singular where the search for free modes came back
+    empty (as four inverse iterations once left a one-element floating bar: random scene 1382,
+    tests/test_front_ends.py) is a ProblemError of one line, not SuperLU's RuntimeError."""
+    import contactqp.model.sparse as sparse_module
+
+    monkeypatch.setattr(sparse_module, "free_modes", lambda *args, **kwargs: None)
+    K = np.array([[1.0, -1.0], [-1.0, 1.0]])  # one spring, nothing holds it: a free mode
+    problem = contactqp.Problem(K, [1.0, 0.0], [[1.0, 0.0]], [0.5])
+    with pytest.raises(contactqp.ProblemError) as refused:
+        contactqp.solve(problem, "lagrange")
+    assert "\n" not in str(refused.value) and str(refused.value).startswith("K is singular")
